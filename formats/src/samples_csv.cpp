@@ -1,0 +1,135 @@
+#include <robocal/formats/samples_csv.hpp>
+
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <string_view>
+
+namespace robocal {
+namespace {
+
+constexpr std::array<const char*, 13> kColumns = {"shell", "ball",  "chuck", "extension_mm", "lat_deg",
+                                                  "lon_deg", "j1",  "j2",    "j3",           "j4",
+                                                  "j5",    "j6",    "length_mm"};
+
+std::string_view trim(std::string_view s) {
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
+  return s;
+}
+
+std::vector<std::string_view> splitFields(std::string_view line) {
+  std::vector<std::string_view> fields;
+  size_t start = 0;
+  while (true) {
+    const size_t comma = line.find(',', start);
+    fields.push_back(trim(line.substr(start, comma - start)));
+    if (comma == std::string_view::npos) break;
+    start = comma + 1;
+  }
+  return fields;
+}
+
+}  // namespace
+
+const char* const kSamplesHeader =
+    "shell,ball,chuck,extension_mm,lat_deg,lon_deg,j1,j2,j3,j4,j5,j6,length_mm";
+
+std::vector<Sample> parseSamples(const std::string& text, const std::string& source) {
+  std::vector<Sample> samples;
+  std::array<int, kColumns.size()> column_of{};
+  size_t header_fields = 0;
+  bool have_header = false;
+  int line_no = 0;
+  size_t pos = 0;
+  while (pos < text.size()) {
+    size_t end = text.find('\n', pos);
+    if (end == std::string::npos) end = text.size();
+    const std::string_view line = trim(std::string_view(text).substr(pos, end - pos));
+    pos = end + 1;
+    ++line_no;
+    if (line.empty() || line.front() == '#') continue;
+    const auto fields = splitFields(line);
+    const std::string where = source + ":" + std::to_string(line_no) + ": ";
+
+    if (!have_header) {
+      for (size_t c = 0; c < kColumns.size(); ++c) {
+        column_of[c] = -1;
+        for (size_t f = 0; f < fields.size(); ++f)
+          if (fields[f] == kColumns[c]) column_of[c] = static_cast<int>(f);
+        if (column_of[c] < 0)
+          throw FormatError(where + "header has no column '" + kColumns[c] +
+                            "' (expected " + kSamplesHeader + ")");
+      }
+      header_fields = fields.size();
+      have_header = true;
+      continue;
+    }
+
+    if (fields.size() != header_fields)
+      throw FormatError(where + "expected " + std::to_string(header_fields) + " fields, got " +
+                        std::to_string(fields.size()));
+    std::array<double, kColumns.size()> v{};
+    for (size_t c = 0; c < kColumns.size(); ++c) {
+      const std::string_view field = fields[column_of[c]];
+      const char* first = field.data();
+      const char* last = field.data() + field.size();
+      if (!field.empty() && *first == '+') ++first;
+      const auto [ptr, ec] = std::from_chars(first, last, v[c]);
+      if (field.empty() || ec != std::errc() || ptr != last)
+        throw FormatError(where + "column '" + kColumns[c] + "': not a number: '" +
+                          std::string(field) + "'");
+      if (!std::isfinite(v[c]))
+        throw FormatError(where + "column '" + kColumns[c] + "': not a finite number");
+    }
+    auto whole = [&](size_t c, int lo, int hi) {
+      if (v[c] != std::floor(v[c]) || v[c] < lo || v[c] > hi)
+        throw FormatError(where + "column '" + kColumns[c] + "': expected a whole number from " +
+                          std::to_string(lo) + " to " + std::to_string(hi) + ", got " +
+                          std::string(fields[column_of[c]]));
+      return static_cast<int>(v[c]);
+    };
+    Sample s;
+    s.shell = whole(0, 0, 1000000);
+    s.ball_index = whole(1, 1, kBallCount) - 1;
+    s.chuck_index = whole(2, 1, kChuckCount) - 1;
+    s.extension_mm = v[3];
+    s.lat_deg = v[4];
+    s.lon_deg = v[5];
+    for (int j = 0; j < kJointCount; ++j) s.joints_deg[j] = v[6 + j];
+    s.length_mm = v[12];
+    if (s.length_mm <= 0) throw FormatError(where + "column 'length_mm': must be positive");
+    s.source = source;
+    s.source_line = line_no;
+    samples.push_back(std::move(s));
+  }
+  if (!have_header) throw FormatError(source + ": empty: no header row (expected " +
+                                      std::string(kSamplesHeader) + ")");
+  return samples;
+}
+
+std::string formatSampleRow(const Sample& s) {
+  char buf[512];
+  std::snprintf(buf, sizeof buf, "%d,%d,%d,%.3f,%.4f,%.4f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f",
+                s.shell, s.ball_index + 1, s.chuck_index + 1, s.extension_mm, s.lat_deg, s.lon_deg,
+                s.joints_deg[0], s.joints_deg[1], s.joints_deg[2], s.joints_deg[3],
+                s.joints_deg[4], s.joints_deg[5], s.length_mm);
+  return buf;
+}
+
+std::string formatSamples(const std::vector<Sample>& samples) {
+  std::string out = std::string(kSamplesHeader) + "\n";
+  for (const Sample& s : samples) out += formatSampleRow(s) + "\n";
+  return out;
+}
+
+std::vector<Sample> loadSamplesFile(const std::string& path) {
+  return parseSamples(readTextFile(path), path);
+}
+
+void saveSamplesFile(const std::string& path, const std::vector<Sample>& samples) {
+  writeTextFileAtomic(path, formatSamples(samples));
+}
+
+}  // namespace robocal

@@ -1,0 +1,87 @@
+// The 54-parameter Sheth-Uicker model of a six-revolute robot (docs/model-format.md).
+//
+//   T = L0 * J1 * L1 * J2 * L2 * ... * J6 * L6
+//   L_k = Trans(x, y, z) * Rz(rz) * Ry(ry) * Rx(rx)
+//   J_k = Rz(offset + gain * reading)
+//
+// The Model struct holds the values as a person reads them (mm, deg). The solver works on a
+// flat parameter vector (ParamVector) in mm, radians and unitless gains; only this module
+// converts between the two.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <array>
+#include <string>
+
+namespace robocal {
+
+inline constexpr int kLinkCount = 7;
+inline constexpr int kJointCount = 6;
+inline constexpr int kBallCount = 3;
+inline constexpr int kChuckCount = 3;
+inline constexpr int kLinkParamCount = 6;
+inline constexpr int kJointParamCount = 2;
+inline constexpr int kParamCount = kLinkCount * kLinkParamCount + kJointCount * kJointParamCount;
+static_assert(kParamCount == 54);
+
+struct LinkParams {
+  std::string name;
+  double x_mm = 0, y_mm = 0, z_mm = 0;
+  double rz_deg = 0, ry_deg = 0, rx_deg = 0;
+};
+
+struct JointParams {
+  std::string name;
+  double offset_deg = 0;
+  double gain = 1.0;
+  double min_deg = -180;  // limits of the joint reading, not of theta
+  double max_deg = 180;
+};
+
+struct Model {
+  std::string name;
+  std::array<LinkParams, kLinkCount> links;
+  std::array<JointParams, kJointCount> joints;
+  std::array<Eigen::Vector3d, kBallCount> balls_mm;    // in the last link's frame (after L6)
+  std::array<Eigen::Vector3d, kChuckCount> chucks_mm;  // in the global (chuck fixture) frame
+};
+
+using ParamVector = Eigen::Matrix<double, kParamCount, 1>;
+using JointsDeg = Eigen::Matrix<double, kJointCount, 1>;  // controller readings, degrees
+
+// Layout of ParamVector, in chain order: L0(x,y,z,rz,ry,rx) J1(offset,gain) L1(...) ... J6 L6.
+// Translations in mm, angles in radians, gains unitless.
+enum class ParamKind { kTranslation, kAngle, kGain };
+constexpr int linkParamIndex(int link) { return link * (kLinkParamCount + kJointParamCount); }
+constexpr int jointParamIndex(int joint /*0-based*/) {
+  return linkParamIndex(joint) + kLinkParamCount;
+}
+ParamKind paramKind(int index);
+// "L0.x", "L3.ry", "J1.offset", "J6.gain".
+std::string paramName(int index);
+// Unit of the parameter at the interfaces: "mm", "deg" or "" (gain).
+const char* paramUnit(int index);
+// Value of parameter `index` of `params` in interface units (mm, deg, unitless).
+double paramInterfaceValue(const ParamVector& params, int index);
+// Finds a parameter by its name; -1 when no parameter has it.
+int paramIndexByName(const std::string& name);
+
+ParamVector toParams(const Model& model);
+// A copy of `base` (names, limits, balls, chucks) with its 54 parameters replaced.
+Model withParams(const Model& base, const ParamVector& params);
+
+Eigen::Isometry3d linkTransform(const LinkParams& link);
+// Inverse of linkTransform: x, y, z, and ZYX Euler angles rz in (-180, 180], ry in [-90, 90].
+LinkParams linkFromTransform(const Eigen::Isometry3d& transform, std::string name = {});
+
+// One row of a standard Denavit-Hartenberg table: Rz(theta) Tz(d) Tx(a) Rx(alpha).
+struct DHRow {
+  double d_mm, a_mm, alpha_deg, theta_offset_deg;
+};
+// Sheth-Uicker model equivalent to a standard DH chain: L0 = base, L_k = Tz(d_k) Tx(a_k) Rx(alpha_k)
+// for k = 1..5, L6 = Tz(d_6) Tx(a_6) Rx(alpha_6) * tool; joint offsets from the table, gains 1.
+Model modelFromStandardDH(const std::array<DHRow, kJointCount>& dh, const Eigen::Isometry3d& base,
+                          const Eigen::Isometry3d& tool);
+
+}  // namespace robocal

@@ -1,0 +1,19 @@
+// The PUMA 560's published standard DH tables and the nominal model robocal ships
+// (config/puma560.json is this model; a test keeps the two equal).
+#pragma once
+
+#include <robocal/kinematics/model.hpp>
+
+namespace robocal {
+
+// Lloyd's values (robotics FAQ): a2 = 431.8, a3 = 20.32, d3 = 149.09, d4 = 433.07 mm.
+std::array<DHRow, kJointCount> puma560DH();
+// Corke's Robotics Toolbox mdl_puma560: a2 = 431.8, a3 = 20.3, d3 = 150.05, d4 = 431.8 mm.
+std::array<DHRow, kJointCount> puma560CorkeDH();
+
+// The nominal PUMA 560 of a robocal cell: Lloyd's DH table, the joint-1 frame at shoulder height
+// placed relative to the chuck fixture, the flange 56.25 mm past the wrist centre, the three
+// balls on a tool fixture and the three chucks on the table fixture, and Corke's joint limits.
+Model puma560NominalModel();
+
+}  // namespace robocal

@@ -1,0 +1,37 @@
+// One ball-bar measurement: which ball and chuck, the joint readings, the absolute bar length.
+// Plain data; formats/ reads and writes it as CSV (docs/samples-format.md).
+#pragma once
+
+#include <robocal/kinematics/model.hpp>
+
+#include <string>
+#include <vector>
+
+namespace robocal {
+
+struct Sample {
+  int shell = 0;
+  int ball_index = 0;   // 0-based here, 1-based in files
+  int chuck_index = 0;  // 0-based here, 1-based in files
+  double extension_mm = 0;
+  double lat_deg = 0;
+  double lon_deg = 0;
+  JointsDeg joints_deg = JointsDeg::Zero();
+  double length_mm = 0;  // absolute ball-centre to chuck-centre distance
+  std::string source;    // file it came from ("" when made in memory)
+  int source_line = 0;   // 1-based line in that file (0 when made in memory)
+};
+
+// A ball-chuck pair, 0-based. Written "B1C2" (1-based) at the interfaces.
+struct Connection {
+  int ball_index = 0;
+  int chuck_index = 0;
+  friend bool operator==(const Connection&, const Connection&) = default;
+};
+
+std::string connectionName(const Connection& c);
+// "all" or a comma list like "B1C1,B2C3"; throws std::invalid_argument naming the bad item.
+std::vector<Connection> parseConnections(const std::string& text);
+std::vector<Connection> allConnections();
+
+}  // namespace robocal

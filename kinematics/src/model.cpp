@@ -1,0 +1,136 @@
+#include <robocal/kinematics/model.hpp>
+
+#include <cmath>
+#include <numbers>
+
+namespace robocal {
+namespace {
+
+constexpr double kRadPerDeg = std::numbers::pi / 180.0;
+constexpr double kDegPerRad = 180.0 / std::numbers::pi;
+constexpr std::array<const char*, kLinkParamCount> kLinkKeys = {"x", "y", "z", "rz", "ry", "rx"};
+constexpr std::array<const char*, kJointParamCount> kJointKeys = {"offset", "gain"};
+constexpr int kBlock = kLinkParamCount + kJointParamCount;
+
+}  // namespace
+
+ParamKind paramKind(int index) {
+  const int within = index % kBlock;
+  if (within < 3) return ParamKind::kTranslation;
+  if (within < kLinkParamCount) return ParamKind::kAngle;
+  return within == kLinkParamCount ? ParamKind::kAngle : ParamKind::kGain;
+}
+
+std::string paramName(int index) {
+  const int block = index / kBlock;
+  const int within = index % kBlock;
+  if (within < kLinkParamCount) return "L" + std::to_string(block) + "." + kLinkKeys[within];
+  return "J" + std::to_string(block + 1) + "." + kJointKeys[within - kLinkParamCount];
+}
+
+const char* paramUnit(int index) {
+  switch (paramKind(index)) {
+    case ParamKind::kTranslation:
+      return "mm";
+    case ParamKind::kAngle:
+      return "deg";
+    case ParamKind::kGain:
+      break;
+  }
+  return "";
+}
+
+double paramInterfaceValue(const ParamVector& params, int index) {
+  return paramKind(index) == ParamKind::kAngle ? params[index] * kDegPerRad : params[index];
+}
+
+int paramIndexByName(const std::string& name) {
+  for (int i = 0; i < kParamCount; ++i)
+    if (paramName(i) == name) return i;
+  return -1;
+}
+
+ParamVector toParams(const Model& model) {
+  ParamVector p;
+  for (int k = 0; k < kLinkCount; ++k) {
+    const LinkParams& l = model.links[k];
+    const int i = linkParamIndex(k);
+    p.segment<6>(i) << l.x_mm, l.y_mm, l.z_mm, l.rz_deg * kRadPerDeg, l.ry_deg * kRadPerDeg,
+        l.rx_deg * kRadPerDeg;
+  }
+  for (int j = 0; j < kJointCount; ++j) {
+    const int i = jointParamIndex(j);
+    p[i] = model.joints[j].offset_deg * kRadPerDeg;
+    p[i + 1] = model.joints[j].gain;
+  }
+  return p;
+}
+
+Model withParams(const Model& base, const ParamVector& p) {
+  Model m = base;
+  for (int k = 0; k < kLinkCount; ++k) {
+    LinkParams& l = m.links[k];
+    const int i = linkParamIndex(k);
+    l.x_mm = p[i];
+    l.y_mm = p[i + 1];
+    l.z_mm = p[i + 2];
+    l.rz_deg = p[i + 3] * kDegPerRad;
+    l.ry_deg = p[i + 4] * kDegPerRad;
+    l.rx_deg = p[i + 5] * kDegPerRad;
+  }
+  for (int j = 0; j < kJointCount; ++j) {
+    const int i = jointParamIndex(j);
+    m.joints[j].offset_deg = p[i] * kDegPerRad;
+    m.joints[j].gain = p[i + 1];
+  }
+  return m;
+}
+
+Eigen::Isometry3d linkTransform(const LinkParams& l) {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.translation() << l.x_mm, l.y_mm, l.z_mm;
+  t.linear() = (Eigen::AngleAxisd(l.rz_deg * kRadPerDeg, Eigen::Vector3d::UnitZ()) *
+                Eigen::AngleAxisd(l.ry_deg * kRadPerDeg, Eigen::Vector3d::UnitY()) *
+                Eigen::AngleAxisd(l.rx_deg * kRadPerDeg, Eigen::Vector3d::UnitX()))
+                   .toRotationMatrix();
+  return t;
+}
+
+LinkParams linkFromTransform(const Eigen::Isometry3d& t, std::string name) {
+  const Eigen::Matrix3d r = t.linear();
+  LinkParams l;
+  l.name = std::move(name);
+  l.x_mm = t.translation().x();
+  l.y_mm = t.translation().y();
+  l.z_mm = t.translation().z();
+  l.ry_deg = std::atan2(-r(2, 0), std::hypot(r(0, 0), r(1, 0))) * kDegPerRad;
+  l.rz_deg = std::atan2(r(1, 0), r(0, 0)) * kDegPerRad;
+  l.rx_deg = std::atan2(r(2, 1), r(2, 2)) * kDegPerRad;
+  l.rz_deg += 0.0;  // no "-0" in files
+  l.ry_deg += 0.0;
+  l.rx_deg += 0.0;
+  return l;
+}
+
+Model modelFromStandardDH(const std::array<DHRow, kJointCount>& dh, const Eigen::Isometry3d& base,
+                          const Eigen::Isometry3d& tool) {
+  Model m;
+  m.links[0] = linkFromTransform(base, "base");
+  for (int k = 1; k <= kJointCount; ++k) {
+    const DHRow& row = dh[k - 1];
+    Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+    t.translation() << row.a_mm, 0.0, row.d_mm;
+    t.linear() = Eigen::AngleAxisd(row.alpha_deg * kRadPerDeg, Eigen::Vector3d::UnitX())
+                     .toRotationMatrix();
+    if (k == kJointCount) t = t * tool;
+    m.links[k] = linkFromTransform(t, k == kJointCount ? "tool" : "link" + std::to_string(k));
+    m.joints[k - 1].name = "J" + std::to_string(k);
+    m.joints[k - 1].offset_deg = row.theta_offset_deg;
+    m.joints[k - 1].gain = 1.0;
+  }
+  m.balls_mm.fill(Eigen::Vector3d::Zero());
+  m.chucks_mm.fill(Eigen::Vector3d::Zero());
+  return m;
+}
+
+}  // namespace robocal

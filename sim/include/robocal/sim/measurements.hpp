@@ -1,0 +1,57 @@
+// Simulated ball-bar measurements: a perturbed "true" robot, shell poses found with the nominal
+// model, and the lengths the true robot would show. No I/O.
+#pragma once
+
+#include <robocal/kinematics/model.hpp>
+#include <robocal/kinematics/sample.hpp>
+
+#include <random>
+#include <vector>
+
+namespace robocal {
+
+// Standard deviations of the Gaussian errors added to each of the 54 parameters. The defaults
+// leave the balls about 1-2 mm from where the nominal model puts them.
+struct PerturbationSigmas {
+  double translation_mm = 0.2;     // link x, y, z
+  double link_angle_deg = 0.02;    // link rz, ry, rx
+  double joint_offset_deg = 0.05;  // joint offsets
+  double gain = 0.0005;            // joint gains (unitless)
+};
+
+Model perturbModel(const Model& nominal, const PerturbationSigmas& sigmas, std::mt19937_64& rng);
+
+struct ShellRequest {
+  Connection connection;
+  double radius_mm = 100;  // bar nominal length + extension
+  double extension_mm = 0;
+  int points = 90;         // wanted data points on the shell's grid
+  int shell = 1;           // number written to the samples
+};
+
+struct ShellPose {
+  double lat_deg = 0, lon_deg = 0;
+  JointsDeg joints_deg = JointsDeg::Zero();
+};
+
+struct ShellPoses {
+  std::vector<ShellPose> poses;
+  int dropped = 0;  // grid points without a reachable pose inside the joint limits
+};
+
+// Latitude/longitude grid points on the upper hemisphere of the shell, each with a varied tool
+// orientation (seeded by rng) solved by numerical IK of `model` (the nominal, as the planner would).
+ShellPoses shellPoses(const Model& model, const ShellRequest& request, std::mt19937_64& rng);
+
+struct MeasurementNoise {
+  double length_sigma_mm = 0.084;  // LVDT and repeatability, Gaussian
+  double joint_quantum_deg = 0;    // reading resolution; 0 = exact readings
+};
+
+// The samples the true robot gives at the given joint positions: length = true distance + noise,
+// readings quantised when asked.
+std::vector<Sample> measureShell(const Model& truth, const ShellRequest& request,
+                                 const std::vector<ShellPose>& poses, const MeasurementNoise& noise,
+                                 std::mt19937_64& rng);
+
+}  // namespace robocal
