@@ -39,7 +39,8 @@ class Args {
   std::vector<std::string> positional_;
 };
 
-// A subcommand: its name, a one-line summary, and the function that runs it (returns the exit code).
+// A subcommand: its name, a one-line summary, and the function that runs it (returns the exit
+// code).
 struct Command {
   std::string name;
   std::string summary;

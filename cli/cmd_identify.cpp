@@ -61,7 +61,8 @@ ShellFactor shellFactor(const Model& model, const Connection& c, const Args& arg
   req.extension_mm = args.number("extension-mm", 0);
   req.radius_mm = args.number("bar-mm", 100) + req.extension_mm;
   req.points = static_cast<int>(args.integer("points-per-shell", 90));
-  if (req.radius_mm <= 0 || req.points < 1) throw UsageError("shell radius and points must be positive");
+  if (req.radius_mm <= 0 || req.points < 1)
+    throw UsageError("shell radius and points must be positive");
   const ShellPoses poses = shellPoses(model, req, rng);
   const MeasurementNoise exact{0.0, 0.0};
   const auto samples = measureShell(model, req, poses.poses, exact, rng);
@@ -152,7 +153,8 @@ int runTable(const Model& model, const Args& args, std::mt19937_64& rng) {
     }
 
   if (args.flag("json")) {
-    nlohmann::json out = {{"class", "IDENTIFY_TABLE"}, {"paper_rows", nlohmann::json::array()},
+    nlohmann::json out = {{"class", "IDENTIFY_TABLE"},
+                          {"paper_rows", nlohmann::json::array()},
                           {"combinations", nlohmann::json::array()}};
     for (const auto& p : paper) {
       const Row& r = find(p);
@@ -193,7 +195,8 @@ int runTable(const Model& model, const Args& args, std::mt19937_64& rng) {
 }
 
 int run(const std::vector<std::string>& argv) {
-  const Args args(argv, {"model", "connections", "bar-mm", "extension-mm", "points-per-shell", "seed"},
+  const Args args(argv,
+                  {"model", "connections", "bar-mm", "extension-mm", "points-per-shell", "seed"},
                   {"json", "table", "help"});
   if (args.flag("help")) {
     std::fputs(kHelp, stdout);
@@ -220,7 +223,8 @@ int run(const std::vector<std::string>& argv) {
   return 0;
 }
 
-const RegisterCommand registered({"identify", "identifiability: rank of the Jacobian (Table I)", run});
+const RegisterCommand registered({"identify", "identifiability: rank of the Jacobian (Table I)",
+                                  run});
 
 }  // namespace
 }  // namespace robocal::cli

@@ -92,9 +92,10 @@ int run(const std::vector<std::string>& argv) {
   }
   const std::string out = args.get("out", "samples.csv");
   saveSamplesFile(out, samples);
-  std::printf("wrote %zu samples to %s (noise %.3f mm); the truth puts the balls up to %.2f mm "
-              "from the nominal\n",
-              samples.size(), out.c_str(), noise.length_sigma_mm, worst_offset_mm);
+  std::printf(
+      "wrote %zu samples to %s (noise %.3f mm); the truth puts the balls up to %.2f mm "
+      "from the nominal\n",
+      samples.size(), out.c_str(), noise.length_sigma_mm, worst_offset_mm);
   if (args.has("truth-out")) {
     saveModelFile(args.get("truth-out", ""), truth);
     std::printf("wrote the true model to %s\n", args.get("truth-out", "").c_str());
@@ -102,7 +103,8 @@ int run(const std::vector<std::string>& argv) {
   return 0;
 }
 
-const RegisterCommand registered({"simulate", "simulated ball-bar samples of a perturbed robot", run});
+const RegisterCommand registered({"simulate", "simulated ball-bar samples of a perturbed robot",
+                                  run});
 
 }  // namespace
 }  // namespace robocal::cli

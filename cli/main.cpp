@@ -14,7 +14,8 @@ int main(int argc, char** argv) {
             [](const auto& a, const auto& b) { return a.name < b.name; });
   const std::string name = argc > 1 ? argv[1] : "";
   if (name.empty() || name == "help" || name == "--help" || name == "-h") {
-    std::printf("usage: robocal <command> [options]   (robocal <command> --help for its options)\n\n");
+    std::printf(
+        "usage: robocal <command> [options]   (robocal <command> --help for its options)\n\n");
     for (const auto& c : commands) std::printf("  %-14s %s\n", c.name.c_str(), c.summary.c_str());
     return name.empty() ? 2 : 0;
   }

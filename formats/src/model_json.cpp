@@ -8,7 +8,9 @@ namespace {
 
 using nlohmann::json;
 
-const char* typeName(const json& j) { return j.type_name(); }
+const char* typeName(const json& j) {
+  return j.type_name();
+}
 
 class Reader {
  public:
@@ -30,8 +32,7 @@ class Reader {
   }
 
   double numberValue(const json& value, const std::string& path) const {
-    if (!value.is_number())
-      fail(path, std::string("expected a number, got ") + typeName(value));
+    if (!value.is_number()) fail(path, std::string("expected a number, got ") + typeName(value));
     const double v = value.get<double>();
     if (!std::isfinite(v)) fail(path, "not a finite number");
     return v;
@@ -107,7 +108,8 @@ Model modelFromJson(const json& root, const std::string& source) {
   }
 
   const json& balls = r.array(root, "balls", kBallCount);
-  for (int b = 0; b < kBallCount; ++b) m.balls_mm[b] = r.point(balls[b], "balls[" + std::to_string(b) + "]");
+  for (int b = 0; b < kBallCount; ++b)
+    m.balls_mm[b] = r.point(balls[b], "balls[" + std::to_string(b) + "]");
   const json& chucks = r.array(root, "chucks", kChuckCount);
   for (int c = 0; c < kChuckCount; ++c)
     m.chucks_mm[c] = r.point(chucks[c], "chucks[" + std::to_string(c) + "]");
@@ -118,7 +120,7 @@ Model parseModel(const std::string& text, const std::string& source) {
   json root;
   try {
     root = json::parse(text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // syntax errors, and numbers too large for a double
     throw FormatError(source + ": not valid JSON: " + e.what());
   }
   return modelFromJson(root, source);
@@ -130,13 +132,21 @@ nlohmann::ordered_json modelToJson(const Model& m) {
   out["name"] = m.name;
   ojson links = ojson::array();
   for (const LinkParams& l : m.links)
-    links.push_back(ojson{{"name", l.name}, {"x", l.x_mm}, {"y", l.y_mm}, {"z", l.z_mm},
-                     {"rz", l.rz_deg}, {"ry", l.ry_deg}, {"rx", l.rx_deg}});
+    links.push_back(ojson{{"name", l.name},
+                          {"x", l.x_mm},
+                          {"y", l.y_mm},
+                          {"z", l.z_mm},
+                          {"rz", l.rz_deg},
+                          {"ry", l.ry_deg},
+                          {"rx", l.rx_deg}});
   out["links"] = links;
   ojson joints = ojson::array();
   for (const JointParams& j : m.joints)
-    joints.push_back(ojson{{"name", j.name}, {"offset", j.offset_deg}, {"gain", j.gain},
-                      {"min", j.min_deg}, {"max", j.max_deg}});
+    joints.push_back(ojson{{"name", j.name},
+                           {"offset", j.offset_deg},
+                           {"gain", j.gain},
+                           {"min", j.min_deg},
+                           {"max", j.max_deg}});
   out["joints"] = joints;
   ojson balls = ojson::array(), chucks = ojson::array();
   for (const auto& b : m.balls_mm) balls.push_back(ojson::array({b.x(), b.y(), b.z()}));
@@ -146,9 +156,13 @@ nlohmann::ordered_json modelToJson(const Model& m) {
   return out;
 }
 
-std::string formatModel(const Model& model) { return modelToJson(model).dump(2) + "\n"; }
+std::string formatModel(const Model& model) {
+  return modelToJson(model).dump(2) + "\n";
+}
 
-Model loadModelFile(const std::string& path) { return parseModel(readTextFile(path), path); }
+Model loadModelFile(const std::string& path) {
+  return parseModel(readTextFile(path), path);
+}
 
 void saveModelFile(const std::string& path, const Model& model) {
   writeTextFileAtomic(path, formatModel(model));

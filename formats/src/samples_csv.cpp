@@ -9,13 +9,14 @@
 namespace robocal {
 namespace {
 
-constexpr std::array<const char*, 13> kColumns = {"shell", "ball",  "chuck", "extension_mm", "lat_deg",
-                                                  "lon_deg", "j1",  "j2",    "j3",           "j4",
-                                                  "j5",    "j6",    "length_mm"};
+constexpr std::array<const char*, 13> kColumns = {
+    "shell", "ball", "chuck", "extension_mm", "lat_deg", "lon_deg",  "j1",
+    "j2",    "j3",   "j4",    "j5",           "j6",      "length_mm"};
 
 std::string_view trim(std::string_view s) {
   while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r'))
+    s.remove_suffix(1);
   return s;
 }
 
@@ -59,8 +60,8 @@ std::vector<Sample> parseSamples(const std::string& text, const std::string& sou
         for (size_t f = 0; f < fields.size(); ++f)
           if (fields[f] == kColumns[c]) column_of[c] = static_cast<int>(f);
         if (column_of[c] < 0)
-          throw FormatError(where + "header has no column '" + kColumns[c] +
-                            "' (expected " + kSamplesHeader + ")");
+          throw FormatError(where + "header has no column '" + kColumns[c] + "' (expected " +
+                            kSamplesHeader + ")");
       }
       header_fields = fields.size();
       have_header = true;
@@ -104,8 +105,9 @@ std::vector<Sample> parseSamples(const std::string& text, const std::string& sou
     s.source_line = line_no;
     samples.push_back(std::move(s));
   }
-  if (!have_header) throw FormatError(source + ": empty: no header row (expected " +
-                                      std::string(kSamplesHeader) + ")");
+  if (!have_header)
+    throw FormatError(source + ": empty: no header row (expected " + std::string(kSamplesHeader) +
+                      ")");
   return samples;
 }
 
@@ -113,8 +115,8 @@ std::string formatSampleRow(const Sample& s) {
   char buf[512];
   std::snprintf(buf, sizeof buf, "%d,%d,%d,%.3f,%.4f,%.4f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f",
                 s.shell, s.ball_index + 1, s.chuck_index + 1, s.extension_mm, s.lat_deg, s.lon_deg,
-                s.joints_deg[0], s.joints_deg[1], s.joints_deg[2], s.joints_deg[3],
-                s.joints_deg[4], s.joints_deg[5], s.length_mm);
+                s.joints_deg[0], s.joints_deg[1], s.joints_deg[2], s.joints_deg[3], s.joints_deg[4],
+                s.joints_deg[5], s.length_mm);
   return buf;
 }
 

@@ -120,8 +120,8 @@ Model modelFromStandardDH(const std::array<DHRow, kJointCount>& dh, const Eigen:
     const DHRow& row = dh[k - 1];
     Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
     t.translation() << row.a_mm, 0.0, row.d_mm;
-    t.linear() = Eigen::AngleAxisd(row.alpha_deg * kRadPerDeg, Eigen::Vector3d::UnitX())
-                     .toRotationMatrix();
+    t.linear() =
+        Eigen::AngleAxisd(row.alpha_deg * kRadPerDeg, Eigen::Vector3d::UnitX()).toRotationMatrix();
     if (k == kJointCount) t = t * tool;
     m.links[k] = linkFromTransform(t, k == kJointCount ? "tool" : "link" + std::to_string(k));
     m.joints[k - 1].name = "J" + std::to_string(k);

@@ -10,8 +10,8 @@ namespace robocal {
 namespace {
 
 constexpr double kRadPerDeg = std::numbers::pi / 180.0;
-constexpr double kWristMarginDeg = 5.0;    // stay this far from the wrist singularity (J5 = 0)
-constexpr double kLimitMarginDeg = 5.0;    // and this far inside the joint limits
+constexpr double kWristMarginDeg = 5.0;        // stay this far from the wrist singularity (J5 = 0)
+constexpr double kLimitMarginDeg = 5.0;        // and this far inside the joint limits
 constexpr double kBarToolClearanceDeg = 70.0;  // angle kept between the bar and the tool axis
 
 // Grid size close to `points` with about 1.25 longitudes per latitude.
@@ -42,11 +42,15 @@ Model perturbModel(const Model& nominal, const PerturbationSigmas& s, std::mt199
     const bool joint = (i % 8) >= kLinkParamCount;
     double sigma = 0;
     switch (paramKind(i)) {
-      case ParamKind::kTranslation: sigma = s.translation_mm; break;
+      case ParamKind::kTranslation:
+        sigma = s.translation_mm;
+        break;
       case ParamKind::kAngle:
         sigma = (joint ? s.joint_offset_deg : s.link_angle_deg) * kRadPerDeg;
         break;
-      case ParamKind::kGain: sigma = s.gain; break;
+      case ParamKind::kGain:
+        sigma = s.gain;
+        break;
     }
     p[i] += sigma * unit(rng);
   }
@@ -96,8 +100,8 @@ ShellPoses shellPoses(const Model& model, const ShellRequest& req, std::mt19937_
         target.translation() = ball - target.linear() * ball_in_tool;
         std::vector<JointsDeg> seeds;
         if (have_previous) seeds.push_back(previous);
-        const double azimuth = std::atan2(ball.y() - shoulder.y(), ball.x() - shoulder.x()) /
-                               kRadPerDeg;
+        const double azimuth =
+            std::atan2(ball.y() - shoulder.y(), ball.x() - shoulder.x()) / kRadPerDeg;
         for (double wrist : {45.0, -45.0}) {
           JointsDeg s;
           s << azimuth, 30.0, -170.0, 0.0, wrist, 0.0;
@@ -125,8 +129,8 @@ ShellPoses shellPoses(const Model& model, const ShellRequest& req, std::mt19937_
 }
 
 std::vector<Sample> measureShell(const Model& truth, const ShellRequest& req,
-                                 const std::vector<ShellPose>& poses,
-                                 const MeasurementNoise& noise, std::mt19937_64& rng) {
+                                 const std::vector<ShellPose>& poses, const MeasurementNoise& noise,
+                                 std::mt19937_64& rng) {
   const Kinematics kin(truth);
   std::normal_distribution<double> length_noise(0.0, noise.length_sigma_mm);
   std::vector<Sample> samples;

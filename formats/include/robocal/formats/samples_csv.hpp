@@ -10,11 +10,10 @@
 
 namespace robocal {
 
-
 extern const char* const kSamplesHeader;  // the header line robocal writes, without newline
 
 std::vector<Sample> parseSamples(const std::string& text, const std::string& source = "samples");
-std::string formatSampleRow(const Sample& sample);  // one CSV line, without newline
+std::string formatSampleRow(const Sample& sample);              // one CSV line, without newline
 std::string formatSamples(const std::vector<Sample>& samples);  // header + rows
 
 std::vector<Sample> loadSamplesFile(const std::string& path);

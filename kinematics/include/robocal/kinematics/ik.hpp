@@ -12,8 +12,8 @@ struct IkOptions {
   int max_iterations = 200;
   double position_tol_mm = 1e-7;
   double angle_tol_rad = 1e-10;
-  double max_step_deg = 10.0;        // per iteration and joint
-  double orientation_scale_mm = 200; // weighs 1 rad of orientation error like this many mm
+  double max_step_deg = 10.0;         // per iteration and joint
+  double orientation_scale_mm = 200;  // weighs 1 rad of orientation error like this many mm
 };
 
 // Joint readings that put the last link's frame at `target`, starting from `seed`; nullopt when

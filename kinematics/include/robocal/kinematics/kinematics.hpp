@@ -46,9 +46,9 @@ class Kinematics {
 
  private:
   struct LinkConstants {
-    Eigen::Isometry3d full;        // Trans * Rz * Ry * Rx
-    Eigen::Isometry3d after_rz;    // Trans * Rz
-    Eigen::Isometry3d after_ry;    // Trans * Rz * Ry
+    Eigen::Isometry3d full;      // Trans * Rz * Ry * Rx
+    Eigen::Isometry3d after_rz;  // Trans * Rz
+    Eigen::Isometry3d after_ry;  // Trans * Rz * Ry
   };
   ParamVector params_;
   std::array<LinkConstants, kLinkCount> links_;

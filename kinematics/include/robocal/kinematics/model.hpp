@@ -53,7 +53,9 @@ using JointsDeg = Eigen::Matrix<double, kJointCount, 1>;  // controller readings
 // Layout of ParamVector, in chain order: L0(x,y,z,rz,ry,rx) J1(offset,gain) L1(...) ... J6 L6.
 // Translations in mm, angles in radians, gains unitless.
 enum class ParamKind { kTranslation, kAngle, kGain };
-constexpr int linkParamIndex(int link) { return link * (kLinkParamCount + kJointParamCount); }
+constexpr int linkParamIndex(int link) {
+  return link * (kLinkParamCount + kJointParamCount);
+}
 constexpr int jointParamIndex(int joint /*0-based*/) {
   return linkParamIndex(joint) + kLinkParamCount;
 }
@@ -79,8 +81,9 @@ LinkParams linkFromTransform(const Eigen::Isometry3d& transform, std::string nam
 struct DHRow {
   double d_mm, a_mm, alpha_deg, theta_offset_deg;
 };
-// Sheth-Uicker model equivalent to a standard DH chain: L0 = base, L_k = Tz(d_k) Tx(a_k) Rx(alpha_k)
-// for k = 1..5, L6 = Tz(d_6) Tx(a_6) Rx(alpha_6) * tool; joint offsets from the table, gains 1.
+// Sheth-Uicker model equivalent to a standard DH chain: L0 = base, L_k = Tz(d_k) Tx(a_k)
+// Rx(alpha_k) for k = 1..5, L6 = Tz(d_6) Tx(a_6) Rx(alpha_6) * tool; joint offsets from the table,
+// gains 1.
 Model modelFromStandardDH(const std::array<DHRow, kJointCount>& dh, const Eigen::Isometry3d& base,
                           const Eigen::Isometry3d& tool);
 

@@ -25,8 +25,8 @@ struct ShellRequest {
   Connection connection;
   double radius_mm = 100;  // bar nominal length + extension
   double extension_mm = 0;
-  int points = 90;         // wanted data points on the shell's grid
-  int shell = 1;           // number written to the samples
+  int points = 90;  // wanted data points on the shell's grid
+  int shell = 1;    // number written to the samples
 };
 
 struct ShellPose {
@@ -40,7 +40,8 @@ struct ShellPoses {
 };
 
 // Latitude/longitude grid points on the upper hemisphere of the shell, each with a varied tool
-// orientation (seeded by rng) solved by numerical IK of `model` (the nominal, as the planner would).
+// orientation (seeded by rng) solved by numerical IK of `model` (the nominal, as the planner
+// would).
 ShellPoses shellPoses(const Model& model, const ShellRequest& request, std::mt19937_64& rng);
 
 struct MeasurementNoise {

@@ -20,11 +20,11 @@ struct Identifiability {
   int expected = expectedIndependentParams(kJointCount, 0);
   // Singular values of the column-scaled Jacobian divided by the largest, descending.
   Eigen::VectorXd singular_values;
-  double threshold = 0;   // relative singular values at or below this count as zero
-  double gap = 0;         // sigma[rank-1] / sigma[rank]: how clearly the rank is decided
-  std::vector<int> vanishing;  // parameters whose Jacobian column is zero
-  std::vector<int> redundant;  // parameters left unidentified (vanishing ones included)
-  std::vector<int> identified; // the others; a basis of the identifiable directions
+  double threshold = 0;         // relative singular values at or below this count as zero
+  double gap = 0;               // sigma[rank-1] / sigma[rank]: how clearly the rank is decided
+  std::vector<int> vanishing;   // parameters whose Jacobian column is zero
+  std::vector<int> redundant;   // parameters left unidentified (vanishing ones included)
+  std::vector<int> identified;  // the others; a basis of the identifiable directions
 };
 
 // Relative singular value below which a direction is not identified. Exact redundancies sit

@@ -1,0 +1,77 @@
+#include <catch2/catch.hpp>
+
+#include <robocal/formats/model_json.hpp>
+#include <robocal/kinematics/puma560.hpp>
+
+#include <nlohmann/json.hpp>
+
+using namespace robocal;
+using Catch::Matchers::Contains;
+
+namespace {
+std::string shipped() {
+  return readTextFile(ROBOCAL_SOURCE_DIR "/config/puma560.json");
+}
+
+// The shipped model with one edit applied to its JSON.
+std::string edited(const std::function<void(nlohmann::json&)>& edit) {
+  nlohmann::json j = nlohmann::json::parse(shipped());
+  edit(j);
+  return j.dump();
+}
+}  // namespace
+
+TEST_CASE("config/puma560.json is the PUMA 560 derived from its DH table") {
+  const Model file = parseModel(shipped(), "puma560.json");
+  CHECK(toParams(file).isApprox(toParams(puma560NominalModel()), 1e-12));
+  for (int b = 0; b < kBallCount; ++b) CHECK(file.balls_mm[b] == puma560NominalModel().balls_mm[b]);
+  CHECK(file.joints[1].min_deg == -45);
+  CHECK(file.joints[5].max_deg == 266);
+}
+
+TEST_CASE("a model survives the round trip through its file format exactly") {
+  Model m = puma560NominalModel();
+  m.links[3].ry_deg = 0.0123456789012345;
+  m.joints[4].gain = 1.000321;
+  const Model back = parseModel(formatModel(m));
+  CHECK(toParams(back) == toParams(m));
+  CHECK(back.name == m.name);
+  CHECK(back.links[3].name == m.links[3].name);
+  CHECK(back.chucks_mm[2] == m.chucks_mm[2]);
+}
+
+TEST_CASE("bad model files name the key and the problem") {
+  CHECK_THROWS_WITH(parseModel("{", "m.json"), Contains("m.json: not valid JSON"));
+  CHECK_THROWS_WITH(parseModel("[]", "m.json"), Contains("expected an object"));
+  CHECK_THROWS_WITH(parseModel(edited([](auto& j) { j.erase("links"); }), "m.json"),
+                    Contains("m.json: links: missing"));
+  CHECK_THROWS_WITH(parseModel(edited([](auto& j) { j["links"].erase(6); })),
+                    Contains("links: expected 7 entries, got 6"));
+  CHECK_THROWS_WITH(parseModel(edited([](auto& j) { j["links"][3]["ry"] = "12"; })),
+                    Contains("links[3].ry: expected a number, got string"));
+  CHECK_THROWS_WITH(parseModel(edited([](auto& j) { j["joints"][2].erase("gain"); })),
+                    Contains("joints[2].gain: missing"));
+  CHECK_THROWS_WITH(parseModel(edited([](auto& j) { j["joints"][0]["gain"] = 0; })),
+                    Contains("joints[0].gain: must not be zero"));
+  CHECK_THROWS_WITH(parseModel(edited([](auto& j) {
+                      j["balls"][1] = {1, 2};
+                    })),
+                    Contains("balls[1]: expected [x, y, z]"));
+  CHECK_THROWS_WITH(parseModel(edited([](auto& j) { j["chucks"] = 5; })),
+                    Contains("chucks: expected an array"));
+  // JSON text has no NaN; an overflowing literal is refused with its text, and a non-finite
+  // value handed in as parsed JSON is refused with its key.
+  std::string text = edited([](auto& j) { j["links"][0]["x"] = 123456.0; });
+  text.replace(text.find("123456.0"), 8, "1e999");
+  CHECK_THROWS_WITH(parseModel(text, "m.json"),
+                    Contains("m.json: not valid JSON") && Contains("1e999"));
+  nlohmann::json j = nlohmann::json::parse(shipped());
+  j["links"][0]["x"] = std::numeric_limits<double>::infinity();
+  CHECK_THROWS_WITH(modelFromJson(j, "m.json"),
+                    Contains("m.json: links[0].x: not a finite number"));
+}
+
+TEST_CASE("reading a missing file says which file") {
+  CHECK_THROWS_WITH(loadModelFile("/nonexistent/model.json"),
+                    Contains("/nonexistent/model.json: cannot open"));
+}
