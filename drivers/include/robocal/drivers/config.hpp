@@ -1,0 +1,105 @@
+// Configuration of the serial drivers: where the ports are, how to open them, and the dialect of
+// each device. Defaults are those of docs/drivers.md (the VAL II monitor and a generic LVDT gauge
+// reader as described in hardware.md). JSON keys are the member names; units are in the names.
+#pragma once
+
+#include <nlohmann/json_fwd.hpp>
+
+#include <array>
+#include <string>
+#include <vector>
+
+namespace robocal::drivers {
+
+struct SerialConfig {
+  // A device path ("/dev/ttyUSB0", "/dev/serial/by-id/...", a pty or a symlink to one), or empty
+  // to find the port by its USB serial number and/or description.
+  std::string path;
+  std::string usb_serial;       // exact USB serial number (libserialport enumeration)
+  std::string usb_description;  // case-insensitive substring of description/product/manufacturer
+  int baud = 9600;
+  int data_bits = 8;
+  std::string parity = "none";        // none | odd | even | mark | space
+  int stop_bits = 1;                  // 1 | 2
+  std::string flow_control = "none";  // none | xonxoff | rtscts
+  // auto: ptys (and symlinks to ptys) with termios, real ports with libserialport.
+  std::string opener = "auto";  // auto | libserialport | termios
+  bool exclusive = true;        // refuse to share the port with another program
+};
+
+struct ValConfig {
+  SerialConfig serial;
+  std::string prompt = ".";
+  std::string send_line_ending = "\r";
+  // Command templates. {j1}..{j6} are joint angles (deg), {speed} the monitor speed (percent).
+  std::string move_joints_command = "DO MOVE #PPOINT({j1},{j2},{j3},{j4},{j5},{j6})";
+  std::string where_command = "WHERE";
+  std::string speed_command = "SPEED {speed}";
+  std::string abort_command = "ABORT";
+  int joint_decimals = 3;
+  // One capture: the controller's message. Lines matching it are errors.
+  std::string error_regex = R"(^\s*\*+\s*(.*?)\s*\*?\s*$)";
+  std::string power_off_regex = "POWER OFF|E-?STOP|EMERGENCY";  // matched against the message
+  std::string out_of_range_regex = "OUT OF RANGE|LIMIT|UNREACHABLE";
+  std::vector<std::string> location_headers = {"X", "Y", "Z", "O", "A", "T"};
+  std::vector<std::string> joint_headers = {"JT1", "JT2", "JT3", "JT4", "JT5", "JT6"};
+  // Per-command timeouts (until the prompt is back).
+  double connect_timeout_s = 3.0;
+  double command_timeout_s = 2.0;
+  double where_timeout_s = 2.0;
+  double move_timeout_s = 5.0;  // until the move command's prompt, not the end of the motion
+  double abort_timeout_s = 2.0;
+  // Motion completion: poll WHERE until at the target and still.
+  double poll_interval_s = 0.1;
+  double at_target_tol_deg = 0.05;
+  double still_tol_deg = 0.005;
+  int still_polls = 2;            // consecutive unchanged polls that make "still"
+  double motion_timeout_s = 120;  // whole move, command to still at target
+  double stopped_short_s = 3.0;   // still but not at target this long: the arm was stopped
+};
+
+struct BarConfig {
+  SerialConfig serial;
+  // Line format preset: mm_suffix ("+0.01234 MM"), mitutoyo ("01A+000.1234"),
+  // gn ("GN01,+0016.2345"). It sets the default value_regex; the simulator prints it.
+  std::string format = "mm_suffix";
+  std::string value_regex;     // one capture, the value; empty = the preset's
+  double unit_scale_mm = 1.0;  // mm per unit of the captured value
+  bool ignore_case = true;
+  std::string over_range_regex = R"((OVER|UNDER)[ _-]?RANGE)";
+  std::string no_probe_regex = R"(NO[ _-]?PROBE)";
+  std::string error_regex = R"(^\s*(ERR|ERROR)\b)";
+  std::string mode = "polled";  // polled | streamed
+  std::string poll_command = "?";
+  std::string send_line_ending = "\r";
+  double poll_timeout_s = 0.5;  // one poll's answer
+  double stale_after_s = 2.0;   // no valid reading this long: stale
+  double range_mm = 0;          // |value| past this is over range (0 = only the reader says)
+};
+
+struct DriversConfig {
+  ValConfig val;
+  BarConfig bar;
+};
+
+// Presets of bar line formats (name, regex with one capture).
+std::string barPresetRegex(const std::string& format);
+std::vector<std::string> barPresetNames();
+
+// Parsing: unknown keys and wrong types are ConfigError naming the key path and `source`
+// ("drivers.json: val.serial.baud: expected a number"). Missing keys keep their defaults.
+SerialConfig serialConfigFromJson(const nlohmann::json& json, const std::string& where);
+ValConfig valConfigFromJson(const nlohmann::json& json, const std::string& where = "val");
+BarConfig barConfigFromJson(const nlohmann::json& json, const std::string& where = "bar");
+DriversConfig driversConfigFromJson(const nlohmann::json& json, const std::string& source);
+DriversConfig loadDriversConfig(const std::string& path);
+// Checks values (regexes compile, templates name known fields, numbers in range); ConfigError.
+void validate(const ValConfig& config, const std::string& where = "val");
+void validate(const BarConfig& config, const std::string& where = "bar");
+
+nlohmann::json toJson(const SerialConfig& config);
+nlohmann::json toJson(const ValConfig& config);
+nlohmann::json toJson(const BarConfig& config);
+nlohmann::json toJson(const DriversConfig& config);
+
+}  // namespace robocal::drivers

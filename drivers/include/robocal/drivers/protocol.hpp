@@ -1,0 +1,168 @@
+// The two serial protocols as pure functions: line framing, command templates, the VAL II monitor
+// replies (echo, prompt, error lines, WHERE) and the ball-bar reader's lines. No I/O: the drivers
+// feed these with received bytes, the simulator (robocal-cellsim) formats its output with them,
+// and the tests feed them recorded transcripts.
+#pragma once
+
+#include <robocal/drivers/config.hpp>
+
+#include <array>
+#include <map>
+#include <optional>
+#include <regex>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace robocal::drivers {
+
+using Joints6 = std::array<double, 6>;    // joint readings, deg
+using Location6 = std::array<double, 6>;  // X, Y, Z (mm), O, A, T (deg)
+
+// ---------------------------------------------------------------------------------------------
+// Lines and text
+
+// Splits a byte stream into lines. CR, LF and CR LF each end one line (a CR LF is one ending,
+// even when split across two feeds). What follows the last ending stays pending (a prompt has no
+// line ending after it).
+class LineSplitter {
+ public:
+  void feed(std::string_view bytes, std::vector<std::string>& lines);
+  const std::string& pending() const { return pending_; }
+  std::string takePending();
+  void clear();
+
+ private:
+  std::string pending_;
+  bool after_cr_ = false;
+};
+
+std::string trim(std::string_view text);
+std::string toUpper(std::string_view text);
+// Printable ASCII and tabs only (a line with anything else was garbled on the wire).
+bool isPrintableText(std::string_view text);
+// Readable form of raw bytes for messages and logs: \r, \n, \t, \xNN.
+std::string escapeBytes(std::string_view bytes);
+// Inverse of escapeBytes (also accepts \\): used for transcripts and line endings in configs.
+std::string unescapeBytes(std::string_view text);
+// Parses a whole token as a decimal number ("+1.5", "-.25", "12."); nullopt otherwise.
+std::optional<double> parseNumber(std::string_view token);
+std::string formatFixed(double value, int decimals);
+
+// ---------------------------------------------------------------------------------------------
+// Command templates: "SPEED {speed}" with named fields in braces.
+
+// Field names in order of appearance; ProtocolError on an unclosed or empty brace.
+std::vector<std::string> templateFields(const std::string& text);
+std::string expandTemplate(const std::string& text,
+                           const std::map<std::string, std::string>& fields);
+// A regular expression matching an expanded template (spaces flexible, case-insensitive), with
+// one numeric capture per field; `fields` receives the field names in capture order. The
+// simulator uses it to recognise the commands the driver sends.
+std::regex templateRegex(const std::string& text, std::vector<std::string>& fields);
+
+// ---------------------------------------------------------------------------------------------
+// VAL II monitor
+
+enum class ValErrorKind { kPowerOff, kOutOfRange, kOther };
+
+// A ValConfig with its regular expressions compiled.
+class ValDialect {
+ public:
+  explicit ValDialect(ValConfig config);
+  const ValConfig& config() const { return config_; }
+
+  std::string moveCommand(const Joints6& joints_deg) const;
+  std::string speedCommand(double percent) const;
+  // The message of an error line ("Position out of range"), or nullopt for other lines.
+  std::optional<std::string> errorMessage(const std::string& line) const;
+  ValErrorKind classify(const std::string& message) const;
+  // Throws ArmPowerOffError, OutOfRangeError or ControllerError for an error message.
+  [[noreturn]] void throwError(const std::string& command, const std::string& message) const;
+  bool isPrompt(std::string_view text) const;
+  // An error line as the controller prints it: "*Position out of range*".
+  static std::string formatError(const std::string& message);
+
+ private:
+  ValConfig config_;
+  std::regex error_re_, power_off_re_, out_of_range_re_;
+};
+
+// Gathers the controller's reply to one command from received bytes: drops the echo of the
+// command (with or without the prompt before it) and empty lines, collects error lines, and is
+// complete when the prompt comes back (alone on a line, or pending at the end without a line
+// ending).
+class ValReplyCollector {
+ public:
+  ValReplyCollector(const ValDialect& dialect, std::string command);
+  // Returns true once the reply is complete.
+  bool feed(std::string_view bytes);
+  bool complete() const { return complete_; }
+  const std::vector<std::string>& lines() const { return lines_; }    // reply text lines
+  const std::vector<std::string>& errors() const { return errors_; }  // error messages
+  const std::string& raw() const { return raw_; }                     // every byte received
+  bool echoSeen() const { return echo_seen_; }
+
+ private:
+  void line(const std::string& text);
+  const ValDialect& dialect_;
+  std::string command_;
+  LineSplitter splitter_;
+  std::vector<std::string> lines_, errors_;
+  std::string raw_;
+  bool complete_ = false, echo_seen_ = false;
+};
+
+struct WhereReply {
+  Joints6 joints_deg{};
+  std::optional<Location6> location;  // when the X Y Z O A T block is present and parses
+};
+
+// Finds the joint block by its header names (case-insensitive) and reads the next line of
+// numbers below it, matching values to headers by whitespace-separated position (by column
+// nearness when a column such as HAND is blank). Never by fixed columns. ProtocolError saying
+// what is missing otherwise.
+WhereReply parseWhere(const std::vector<std::string>& lines, const ValConfig& config);
+
+// How the simulator prints WHERE; the parser accepts any of these.
+struct WhereLayout {
+  int column_width = 10;
+  int decimals = 3;
+  bool hand_column = false;  // a "HAND" header after T with a value (or blank)
+  bool hand_blank = false;
+};
+std::vector<std::string> formatWhere(const ValConfig& config, const WhereLayout& layout,
+                                     const Location6& location, const Joints6& joints_deg);
+
+// ---------------------------------------------------------------------------------------------
+// Ball-bar reader
+
+enum class BarLineKind { kReading, kOverRange, kNoProbe, kDeviceError, kGarbage };
+const char* barLineKindName(BarLineKind kind);
+
+struct BarLine {
+  BarLineKind kind = BarLineKind::kGarbage;
+  double value_mm = 0;  // kReading: captured value times unit_scale_mm
+};
+
+// A BarConfig with its regular expressions compiled.
+class BarDialect {
+ public:
+  explicit BarDialect(BarConfig config);
+  const BarConfig& config() const { return config_; }
+  // Classifies one received line (without its line ending). A reading past range_mm (when set)
+  // is kOverRange.
+  BarLine parse(const std::string& line) const;
+  std::string pollCommandBytes() const { return config_.poll_command + config_.send_line_ending; }
+
+ private:
+  BarConfig config_;
+  std::regex value_re_, over_range_re_, no_probe_re_, error_re_;
+};
+
+// A reading as a reader of the given format preset prints it (value in the reader's unit).
+std::string formatBarReading(const std::string& format, double value);
+// Status lines: "OVER RANGE", "UNDER RANGE", "NO PROBE", "ERR 1".
+std::string formatBarStatus(BarLineKind kind, bool under = false);
+
+}  // namespace robocal::drivers

@@ -1,0 +1,94 @@
+// The byte-stream seam: one serial port as a boost::asio::posix::stream_descriptor, opened with
+// libserialport (real ports, found by path or by USB serial number / description; settings from
+// the config; exclusive) or with termios (pseudo-terminals, which libserialport cannot open).
+// The I/O is the same Asio code either way. The daemon uses stream() asynchronously in its event
+// loop; tests and the command line use the synchronous helpers, which run the io_context in the
+// calling thread until the operation completes or its deadline passes.
+#pragma once
+
+#include <robocal/drivers/config.hpp>
+#include <robocal/drivers/errors.hpp>
+
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/posix/stream_descriptor.hpp>
+
+#include <array>
+#include <chrono>
+#include <functional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace robocal::drivers {
+
+using Clock = std::chrono::steady_clock;
+Clock::time_point deadlineAfter(double seconds);
+
+// One serial port as libserialport enumerates it.
+struct PortInfo {
+  std::string path;
+  std::string description;
+  std::string transport;  // usb | native | bluetooth
+  std::string usb_manufacturer, usb_product, usb_serial;
+  int usb_vid = -1, usb_pid = -1;
+  int usb_bus = -1, usb_address = -1;
+};
+std::vector<PortInfo> listSerialPorts();
+
+// True for /dev/pts/N (and symlinks to it): a pseudo-terminal, opened with termios.
+bool isPseudoTerminal(const std::string& path);
+// The device path the config names: `path` itself, or the enumerated port whose USB serial
+// number equals usb_serial and/or whose description, product or manufacturer contains
+// usb_description. PortError listing the ports present when nothing (or more than one) matches.
+std::string resolvePortPath(const SerialConfig& config);
+
+// Runs `io` in the calling thread until done() or the deadline; returns done().
+bool runIoUntil(boost::asio::io_context& io, const std::function<bool()>& done,
+                Clock::time_point deadline);
+
+class SerialLink {
+ public:
+  SerialLink(boost::asio::io_context& io, SerialConfig config);
+  ~SerialLink();
+  SerialLink(const SerialLink&) = delete;
+  SerialLink& operator=(const SerialLink&) = delete;
+
+  // Opens (or re-opens) the port; PortError in technician words when it cannot.
+  void open();
+  void close();
+  bool isOpen() const { return stream_.is_open(); }
+  const SerialConfig& config() const { return config_; }
+  // The resolved device path and how it was opened ("termios" or "libserialport").
+  const std::string& path() const { return path_; }
+  const std::string& opener() const { return opener_; }
+  std::string describe() const;
+
+  boost::asio::io_context& context() { return io_; }
+  boost::asio::posix::stream_descriptor& stream() { return stream_; }
+
+  // Synchronous helpers. TimeoutError at the deadline, DisconnectedError when the port goes away
+  // (the link is then closed; open() again to reconnect).
+  void write(std::string_view bytes, Clock::time_point deadline);
+  // Appends at least one received byte to `out`; false when nothing came before the deadline.
+  bool readSome(std::string& out, Clock::time_point deadline);
+  // Discards input already received (by the kernel) and not yet read.
+  void discardInput();
+
+  // Called by asynchronous users when a read or write failed: closes the link and returns the
+  // DisconnectedError that describes it.
+  DisconnectedError disconnected(const std::string& why);
+
+ private:
+  void openTermios();
+  void openLibserialport();
+
+  boost::asio::io_context& io_;
+  SerialConfig config_;
+  boost::asio::posix::stream_descriptor stream_;
+  std::string path_, opener_;
+  void* sp_port_ = nullptr;  // struct sp_port*, kept open while libserialport owns the port
+  int sp_fd_ = -1;
+  std::array<char, 4096> buffer_{};
+};
+
+}  // namespace robocal::drivers

@@ -1,0 +1,193 @@
+#include <robocal/drivers/bar.hpp>
+
+#include <thread>
+
+namespace robocal::drivers {
+
+namespace {
+constexpr std::size_t kMaxLineBytes = 256;  // longer without a line ending: a partial line
+}
+
+BarReader::BarReader(boost::asio::io_context& io, BarConfig config)
+    : io_(io), dialect_(std::move(config)), link_(io, dialect_.config().serial) {
+  validate(dialect_.config());
+}
+
+BarReader::~BarReader() {
+  alive_.reset();
+  link_.close();
+}
+
+void BarReader::connect() {
+  link_.close();
+  alive_ = std::make_shared<int>(0);  // orphans handlers of the previous connection
+  reading_ = false;
+  link_.open();
+  disconnected_ = false;
+  disconnect_reason_.clear();
+  splitter_.clear();
+  arm();
+}
+
+void BarReader::reconnect(double within_s) {
+  const auto deadline = deadlineAfter(within_s);
+  std::string last = "not tried";
+  while (true) {
+    try {
+      connect();
+      return;
+    } catch (const PortError& e) {
+      last = e.what();
+    }
+    if (Clock::now() >= deadline)
+      throw PortError("could not reconnect to the ball-bar reader within " +
+                      formatFixed(within_s, 1) + " s: " + last);
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+}
+
+void BarReader::disconnect() {
+  alive_.reset();
+  link_.close();
+  reading_ = false;
+}
+
+void BarReader::arm() {
+  if (reading_ || !link_.isOpen()) return;
+  reading_ = true;
+  std::weak_ptr<int> alive = alive_;
+  link_.stream().async_read_some(boost::asio::buffer(buffer_),
+                                 [this, alive](const boost::system::error_code& ec, std::size_t n) {
+                                   if (alive.expired()) return;
+                                   reading_ = false;
+                                   if (ec == boost::asio::error::operation_aborted) return;
+                                   if (ec) {
+                                     dropPartial();
+                                     disconnected_ = true;
+                                     ++stats_.disconnects;
+                                     disconnect_reason_ = link_.disconnected(ec.message()).what();
+                                     return;
+                                   }
+                                   received(n);
+                                   arm();
+                                 });
+}
+
+void BarReader::received(std::size_t n) {
+  std::vector<std::string> lines;
+  splitter_.feed(std::string_view(buffer_.data(), n), lines);
+  for (const auto& l : lines) handleLine(l);
+  if (splitter_.pending().size() > kMaxLineBytes) dropPartial();
+}
+
+void BarReader::dropPartial() {
+  if (splitter_.pending().empty()) return;
+  ++stats_.partial_lines;
+  splitter_.takePending();
+}
+
+void BarReader::handleLine(const std::string& line) {
+  if (trim(line).empty()) return;
+  const BarLine parsed = dialect_.parse(line);
+  switch (parsed.kind) {
+    case BarLineKind::kGarbage:
+      ++stats_.garbage_lines;
+      return;
+    case BarLineKind::kReading:
+      ++stats_.readings;
+      break;
+    case BarLineKind::kOverRange:
+      ++stats_.over_range;
+      break;
+    case BarLineKind::kNoProbe:
+      ++stats_.no_probe;
+      break;
+    case BarLineKind::kDeviceError:
+      ++stats_.device_errors;
+      break;
+  }
+  BarReading r;
+  r.kind = parsed.kind;
+  r.value_mm = parsed.value_mm;
+  r.time = Clock::now();
+  r.sequence = ++sequence_;
+  r.line = line;
+  latest_ = r;
+  if (r.kind == BarLineKind::kReading) latest_valid_ = r;
+  if (callback_) callback_(r);
+}
+
+void BarReader::drainBacklog() {
+  // Lines that waited in the kernel while nobody ran the io_context are old: process them now so
+  // that read() returns only what arrives after it was called.
+  if (io_.stopped()) io_.restart();
+  while (io_.poll() > 0) {
+  }
+}
+
+bool BarReader::isStale(Clock::time_point now) const {
+  return !latest_valid_ || std::chrono::duration<double>(now - latest_valid_->time).count() >
+                               dialect_.config().stale_after_s;
+}
+
+BarReading BarReader::read() {
+  const BarConfig& c = dialect_.config();
+  const auto not_connected = [&] {
+    return DisconnectedError(disconnect_reason_.empty()
+                                 ? "the ball-bar reader port " + link_.describe() + " is not open"
+                                 : disconnect_reason_);
+  };
+  if (!isConnected()) throw not_connected();
+  drainBacklog();
+  if (!isConnected()) throw not_connected();
+  const auto stale_deadline = deadlineAfter(c.stale_after_s);
+  const bool polled = c.mode == "polled";
+  const std::uint64_t start = sequence_;
+  const long garbage_before = stats_.garbage_lines + stats_.partial_lines;
+  while (true) {
+    auto attempt_deadline = stale_deadline;
+    if (polled) {
+      dropPartial();
+      link_.write(dialect_.pollCommandBytes(), deadlineAfter(c.poll_timeout_s));
+      attempt_deadline = std::min(stale_deadline, deadlineAfter(c.poll_timeout_s));
+    }
+    runIoUntil(
+        io_, [&] { return sequence_ != start || disconnected_; }, attempt_deadline);
+    if (sequence_ != start) return *latest_;
+    if (disconnected_) throw not_connected();
+    ++stats_.timeouts;
+    if (Clock::now() >= stale_deadline) {
+      const long garbage = stats_.garbage_lines + stats_.partial_lines - garbage_before;
+      std::string what = "no reading from the ball-bar reader on " + link_.describe() + " for " +
+                         formatFixed(c.stale_after_s, 1) + " s";
+      if (garbage > 0)
+        what += ": " + std::to_string(garbage) +
+                " line(s) came that match no configured pattern (wrong baud rate, or "
+                "bar.value_regex does not fit the reader's format?)";
+      else if (polled)
+        what += ": it does not answer the poll command \"" + escapeBytes(c.poll_command) +
+                "\" (powered on? cable? baud rate? bar.mode should be streamed?)";
+      else
+        what += ": the stream stopped (powered on? cable? bar.mode should be polled?)";
+      throw StaleReadingError(what);
+    }
+  }
+}
+
+double BarReader::readValueMm() {
+  const BarReading r = read();
+  switch (r.kind) {
+    case BarLineKind::kReading:
+      return r.value_mm;
+    case BarLineKind::kOverRange:
+      throw BarStatusError("the ball-bar is over range (\"" + r.line +
+                           "\"): the bar is stretched or compressed past the LVDT's travel");
+    case BarLineKind::kNoProbe:
+      throw BarStatusError("the ball-bar reader reports no probe (\"" + r.line +
+                           "\"): is the LVDT cable plugged into the reader?");
+    default:
+      throw BarStatusError("the ball-bar reader reports an error: \"" + r.line + "\"");
+  }
+}
+
+}  // namespace robocal::drivers

@@ -1,0 +1,350 @@
+#include <robocal/drivers/config.hpp>
+#include <robocal/drivers/errors.hpp>
+#include <robocal/drivers/protocol.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include <fstream>
+#include <regex>
+#include <set>
+#include <sstream>
+
+namespace robocal::drivers {
+namespace {
+
+using nlohmann::json;
+
+// Reads members of one JSON object, naming the key path in every error, and rejects unknown keys
+// (a misspelt key would otherwise silently keep its default).
+class ObjectReader {
+ public:
+  ObjectReader(const json& object, std::string where) : object_(object), where_(std::move(where)) {
+    if (!object_.is_object()) throw ConfigError(where_ + ": expected a JSON object");
+  }
+  std::string path(const std::string& key) const { return where_ + "." + key; }
+
+  void get(const std::string& key, std::string& out) {
+    read(key, out, "a string", &json::is_string);
+  }
+  void get(const std::string& key, bool& out) {
+    read(key, out, "true or false", &json::is_boolean);
+  }
+  void get(const std::string& key, double& out) { read(key, out, "a number", &json::is_number); }
+  void get(const std::string& key, int& out) {
+    const json* v = find(key);
+    if (!v) return;
+    if (!v->is_number_integer()) throw ConfigError(path(key) + ": expected a whole number");
+    out = v->get<int>();
+  }
+  void get(const std::string& key, std::vector<std::string>& out) {
+    const json* v = find(key);
+    if (!v) return;
+    if (!v->is_array()) throw ConfigError(path(key) + ": expected a list of strings");
+    std::vector<std::string> values;
+    for (std::size_t i = 0; i < v->size(); ++i) {
+      if (!(*v)[i].is_string())
+        throw ConfigError(path(key) + "[" + std::to_string(i) + "]: expected a string");
+      values.push_back((*v)[i].get<std::string>());
+    }
+    out = values;
+  }
+  const json* child(const std::string& key) { return find(key); }
+
+  void finish() const {
+    for (const auto& item : object_.items()) {
+      const std::string& key = item.key();
+      if (used_.count(key)) continue;
+      throw ConfigError(path(key) + ": unknown key");
+    }
+  }
+
+ private:
+  const json* find(const std::string& key) {
+    used_.insert(key);
+    auto it = object_.find(key);
+    return it == object_.end() ? nullptr : &*it;
+  }
+  template <typename T>
+  void read(const std::string& key, T& out, const char* expected,
+            bool (json::*check)() const noexcept) {
+    const json* v = find(key);
+    if (!v) return;
+    if (!((*v).*check)()) throw ConfigError(path(key) + ": expected " + expected);
+    out = v->get<T>();
+  }
+
+  const json& object_;
+  std::string where_;
+  std::set<std::string> used_;
+};
+
+void checkRegex(const std::string& pattern, const std::string& key, int min_captures) {
+  try {
+    std::regex re(pattern);
+    if (static_cast<int>(re.mark_count()) < min_captures)
+      throw ConfigError(key + ": the regular expression needs " + std::to_string(min_captures) +
+                        " capture group (...) around the value");
+  } catch (const std::regex_error& e) {
+    throw ConfigError(key + ": not a valid regular expression (" + e.what() + "): " + pattern);
+  }
+}
+
+void checkPositive(double value, const std::string& key) {
+  if (!(value > 0)) throw ConfigError(key + ": must be greater than 0");
+}
+
+}  // namespace
+
+std::vector<std::string> barPresetNames() {
+  return {"mm_suffix", "mitutoyo", "gn"};
+}
+
+std::string barPresetRegex(const std::string& format) {
+  if (format == "mm_suffix") return R"(^\s*([+-]?\d+(?:\.\d*)?)\s*MM\s*$)";
+  if (format == "mitutoyo") return R"(^\s*01A([+-]\d+(?:\.\d*)?)\s*$)";
+  if (format == "gn") return R"(^\s*GN\d+,([+-]?\d+(?:\.\d*)?)\s*$)";
+  throw ConfigError("bar.format: unknown format '" + format + "' (mm_suffix, mitutoyo or gn)");
+}
+
+SerialConfig serialConfigFromJson(const json& j, const std::string& where) {
+  SerialConfig c;
+  ObjectReader r(j, where);
+  r.get("path", c.path);
+  r.get("usb_serial", c.usb_serial);
+  r.get("usb_description", c.usb_description);
+  r.get("baud", c.baud);
+  r.get("data_bits", c.data_bits);
+  r.get("parity", c.parity);
+  r.get("stop_bits", c.stop_bits);
+  r.get("flow_control", c.flow_control);
+  r.get("opener", c.opener);
+  r.get("exclusive", c.exclusive);
+  r.finish();
+  if (c.baud <= 0) throw ConfigError(where + ".baud: must be a positive baud rate like 9600");
+  if (c.data_bits < 5 || c.data_bits > 8) throw ConfigError(where + ".data_bits: must be 5 to 8");
+  static const std::set<std::string> parities{"none", "odd", "even", "mark", "space"};
+  if (!parities.count(c.parity))
+    throw ConfigError(where + ".parity: must be none, odd, even, mark or space");
+  if (c.stop_bits != 1 && c.stop_bits != 2) throw ConfigError(where + ".stop_bits: must be 1 or 2");
+  if (c.flow_control != "none" && c.flow_control != "xonxoff" && c.flow_control != "rtscts")
+    throw ConfigError(where + ".flow_control: must be none, xonxoff or rtscts");
+  if (c.opener != "auto" && c.opener != "libserialport" && c.opener != "termios")
+    throw ConfigError(where + ".opener: must be auto, libserialport or termios");
+  return c;
+}
+
+ValConfig valConfigFromJson(const json& j, const std::string& where) {
+  ValConfig c;
+  ObjectReader r(j, where);
+  if (const json* s = r.child("serial")) c.serial = serialConfigFromJson(*s, where + ".serial");
+  r.get("prompt", c.prompt);
+  r.get("send_line_ending", c.send_line_ending);
+  r.get("move_joints_command", c.move_joints_command);
+  r.get("where_command", c.where_command);
+  r.get("speed_command", c.speed_command);
+  r.get("abort_command", c.abort_command);
+  r.get("joint_decimals", c.joint_decimals);
+  r.get("error_regex", c.error_regex);
+  r.get("power_off_regex", c.power_off_regex);
+  r.get("out_of_range_regex", c.out_of_range_regex);
+  r.get("location_headers", c.location_headers);
+  r.get("joint_headers", c.joint_headers);
+  r.get("connect_timeout_s", c.connect_timeout_s);
+  r.get("command_timeout_s", c.command_timeout_s);
+  r.get("where_timeout_s", c.where_timeout_s);
+  r.get("move_timeout_s", c.move_timeout_s);
+  r.get("abort_timeout_s", c.abort_timeout_s);
+  r.get("poll_interval_s", c.poll_interval_s);
+  r.get("at_target_tol_deg", c.at_target_tol_deg);
+  r.get("still_tol_deg", c.still_tol_deg);
+  r.get("still_polls", c.still_polls);
+  r.get("motion_timeout_s", c.motion_timeout_s);
+  r.get("stopped_short_s", c.stopped_short_s);
+  r.finish();
+  validate(c, where);
+  return c;
+}
+
+void validate(const ValConfig& c, const std::string& where) {
+  if (c.prompt.empty()) throw ConfigError(where + ".prompt: must not be empty");
+  if (c.send_line_ending.empty())
+    throw ConfigError(where + ".send_line_ending: must not be empty (\"\\r\" or \"\\r\\n\")");
+  const std::set<std::string> joints{"j1", "j2", "j3", "j4", "j5", "j6"};
+  const auto check_template = [&](const std::string& key, const std::string& text,
+                                  const std::set<std::string>& allowed,
+                                  const std::set<std::string>& required) {
+    std::set<std::string> seen;
+    try {
+      for (const auto& f : templateFields(text)) {
+        if (!allowed.count(f)) throw ConfigError(where + "." + key + ": unknown field {" + f + "}");
+        seen.insert(f);
+      }
+    } catch (const ProtocolError& e) {
+      throw ConfigError(where + "." + key + ": " + e.what());
+    }
+    for (const auto& f : required)
+      if (!seen.count(f)) throw ConfigError(where + "." + key + ": needs the field {" + f + "}");
+    if (text.empty()) throw ConfigError(where + "." + key + ": must not be empty");
+  };
+  check_template("move_joints_command", c.move_joints_command, joints, joints);
+  check_template("where_command", c.where_command, {}, {});
+  check_template("speed_command", c.speed_command, {"speed"}, {"speed"});
+  check_template("abort_command", c.abort_command, {}, {});
+  if (c.joint_decimals < 0 || c.joint_decimals > 6)
+    throw ConfigError(where + ".joint_decimals: must be 0 to 6");
+  checkRegex(c.error_regex, where + ".error_regex", 1);
+  checkRegex(c.power_off_regex, where + ".power_off_regex", 0);
+  checkRegex(c.out_of_range_regex, where + ".out_of_range_regex", 0);
+  if (c.location_headers.size() != 6)
+    throw ConfigError(where + ".location_headers: must name 6 columns (X Y Z O A T)");
+  if (c.joint_headers.size() != 6)
+    throw ConfigError(where + ".joint_headers: must name 6 columns (JT1 ... JT6)");
+  checkPositive(c.connect_timeout_s, where + ".connect_timeout_s");
+  checkPositive(c.command_timeout_s, where + ".command_timeout_s");
+  checkPositive(c.where_timeout_s, where + ".where_timeout_s");
+  checkPositive(c.move_timeout_s, where + ".move_timeout_s");
+  checkPositive(c.abort_timeout_s, where + ".abort_timeout_s");
+  checkPositive(c.poll_interval_s, where + ".poll_interval_s");
+  checkPositive(c.at_target_tol_deg, where + ".at_target_tol_deg");
+  if (c.still_tol_deg < 0) throw ConfigError(where + ".still_tol_deg: must not be negative");
+  if (c.still_polls < 1) throw ConfigError(where + ".still_polls: must be at least 1");
+  checkPositive(c.motion_timeout_s, where + ".motion_timeout_s");
+  checkPositive(c.stopped_short_s, where + ".stopped_short_s");
+}
+
+BarConfig barConfigFromJson(const json& j, const std::string& where) {
+  BarConfig c;
+  ObjectReader r(j, where);
+  if (const json* s = r.child("serial")) c.serial = serialConfigFromJson(*s, where + ".serial");
+  r.get("format", c.format);
+  r.get("value_regex", c.value_regex);
+  r.get("unit_scale_mm", c.unit_scale_mm);
+  r.get("ignore_case", c.ignore_case);
+  r.get("over_range_regex", c.over_range_regex);
+  r.get("no_probe_regex", c.no_probe_regex);
+  r.get("error_regex", c.error_regex);
+  r.get("mode", c.mode);
+  r.get("poll_command", c.poll_command);
+  r.get("send_line_ending", c.send_line_ending);
+  r.get("poll_timeout_s", c.poll_timeout_s);
+  r.get("stale_after_s", c.stale_after_s);
+  r.get("range_mm", c.range_mm);
+  r.finish();
+  validate(c, where);
+  return c;
+}
+
+void validate(const BarConfig& c, const std::string& where) {
+  try {
+    barPresetRegex(c.format);
+  } catch (const ConfigError&) {
+    throw ConfigError(where + ".format: unknown format '" + c.format +
+                      "' (mm_suffix, mitutoyo or gn)");
+  }
+  if (!c.value_regex.empty()) checkRegex(c.value_regex, where + ".value_regex", 1);
+  if (c.unit_scale_mm == 0) throw ConfigError(where + ".unit_scale_mm: must not be 0");
+  checkRegex(c.over_range_regex, where + ".over_range_regex", 0);
+  checkRegex(c.no_probe_regex, where + ".no_probe_regex", 0);
+  checkRegex(c.error_regex, where + ".error_regex", 0);
+  if (c.mode != "polled" && c.mode != "streamed")
+    throw ConfigError(where + ".mode: must be polled or streamed");
+  if (c.mode == "polled" && c.poll_command.empty())
+    throw ConfigError(where + ".poll_command: must not be empty in polled mode");
+  checkPositive(c.poll_timeout_s, where + ".poll_timeout_s");
+  checkPositive(c.stale_after_s, where + ".stale_after_s");
+  if (c.range_mm < 0) throw ConfigError(where + ".range_mm: must not be negative");
+}
+
+DriversConfig driversConfigFromJson(const json& j, const std::string& source) {
+  DriversConfig c;
+  try {
+    ObjectReader r(j, source);
+    if (const json* v = r.child("val")) c.val = valConfigFromJson(*v, "val");
+    if (const json* b = r.child("bar")) c.bar = barConfigFromJson(*b, "bar");
+    std::string comment;  // free text for people editing the file
+    r.get("comment", comment);
+    r.finish();
+  } catch (const ConfigError& e) {
+    const std::string what = e.what();
+    if (what.rfind(source, 0) == 0) throw;
+    throw ConfigError(source + ": " + what);
+  }
+  return c;
+}
+
+DriversConfig loadDriversConfig(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw ConfigError(path + ": cannot read the drivers configuration file");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  json j;
+  try {
+    j = json::parse(ss.str());
+  } catch (const json::parse_error& e) {
+    throw ConfigError(path + ": not valid JSON: " + e.what());
+  }
+  return driversConfigFromJson(j, path);
+}
+
+json toJson(const SerialConfig& c) {
+  return json{{"path", c.path},
+              {"usb_serial", c.usb_serial},
+              {"usb_description", c.usb_description},
+              {"baud", c.baud},
+              {"data_bits", c.data_bits},
+              {"parity", c.parity},
+              {"stop_bits", c.stop_bits},
+              {"flow_control", c.flow_control},
+              {"opener", c.opener},
+              {"exclusive", c.exclusive}};
+}
+
+json toJson(const ValConfig& c) {
+  return json{{"serial", toJson(c.serial)},
+              {"prompt", c.prompt},
+              {"send_line_ending", c.send_line_ending},
+              {"move_joints_command", c.move_joints_command},
+              {"where_command", c.where_command},
+              {"speed_command", c.speed_command},
+              {"abort_command", c.abort_command},
+              {"joint_decimals", c.joint_decimals},
+              {"error_regex", c.error_regex},
+              {"power_off_regex", c.power_off_regex},
+              {"out_of_range_regex", c.out_of_range_regex},
+              {"location_headers", c.location_headers},
+              {"joint_headers", c.joint_headers},
+              {"connect_timeout_s", c.connect_timeout_s},
+              {"command_timeout_s", c.command_timeout_s},
+              {"where_timeout_s", c.where_timeout_s},
+              {"move_timeout_s", c.move_timeout_s},
+              {"abort_timeout_s", c.abort_timeout_s},
+              {"poll_interval_s", c.poll_interval_s},
+              {"at_target_tol_deg", c.at_target_tol_deg},
+              {"still_tol_deg", c.still_tol_deg},
+              {"still_polls", c.still_polls},
+              {"motion_timeout_s", c.motion_timeout_s},
+              {"stopped_short_s", c.stopped_short_s}};
+}
+
+json toJson(const BarConfig& c) {
+  return json{{"serial", toJson(c.serial)},
+              {"format", c.format},
+              {"value_regex", c.value_regex},
+              {"unit_scale_mm", c.unit_scale_mm},
+              {"ignore_case", c.ignore_case},
+              {"over_range_regex", c.over_range_regex},
+              {"no_probe_regex", c.no_probe_regex},
+              {"error_regex", c.error_regex},
+              {"mode", c.mode},
+              {"poll_command", c.poll_command},
+              {"send_line_ending", c.send_line_ending},
+              {"poll_timeout_s", c.poll_timeout_s},
+              {"stale_after_s", c.stale_after_s},
+              {"range_mm", c.range_mm}};
+}
+
+json toJson(const DriversConfig& c) {
+  return json{{"val", toJson(c.val)}, {"bar", toJson(c.bar)}};
+}
+
+}  // namespace robocal::drivers
