@@ -23,7 +23,7 @@ the singular-value gap that decides the rank, and the parameters left unidentifi
 
   --model FILE          model (model format)                          required
   --connections LIST    all, or e.g. B1C1,B1C2,B1C3                    [all]
-  --bar-mm L            bar length at zero deflection                  [100]
+  --bar-mm L            bar length at zero deflection                  [150]
   --extension-mm E      extension bar length                           [0]
   --points-per-shell N  grid points per shell                          [90]
   --seed N              seed for the tool orientations                 [1]
@@ -59,7 +59,7 @@ ShellFactor shellFactor(const Model& model, const Connection& c, const Args& arg
   ShellRequest req;
   req.connection = c;
   req.extension_mm = args.number("extension-mm", 0);
-  req.radius_mm = args.number("bar-mm", 100) + req.extension_mm;
+  req.radius_mm = args.number("bar-mm", kDefaultBarMm) + req.extension_mm;
   req.points = static_cast<int>(args.integer("points-per-shell", 90));
   if (req.radius_mm <= 0 || req.points < 1)
     throw UsageError("shell radius and points must be positive");
@@ -172,7 +172,7 @@ int runTable(const Model& model, const Args& args, std::mt19937_64& rng) {
   }
   std::printf("Table I (paper rows), %ld points per shell, radius %.0f mm\n",
               args.integer("points-per-shell", 90),
-              args.number("bar-mm", 100) + args.number("extension-mm", 0));
+              args.number("bar-mm", kDefaultBarMm) + args.number("extension-mm", 0));
   for (const auto& p : paper) {
     const Row& r = find(p);
     std::printf("  %-44s rank %2d  gap %.2g\n", joinConnections(r.connections).c_str(), r.id.rank,

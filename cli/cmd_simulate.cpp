@@ -22,7 +22,7 @@ perturbed (or a given truth), poses on each connection's shell found with the no
   --noise-mm S              Gaussian length noise, standard deviation           [0.084]
   --quantum-deg Q           joint-reading quantisation (0 = exact)              [0]
   --connections LIST        all, or e.g. B1C1,B2C3                             [all]
-  --bar-mm L                bar length at zero deflection without extension    [100]
+  --bar-mm L                bar length at zero deflection without extension    [150]
   --extension-mm E          extension bar length                                [0]
   --points-per-shell N      grid points wanted per shell                        [90]
   --first-shell N           number of the first shell in the samples            [1]
@@ -61,7 +61,7 @@ int run(const std::vector<std::string>& argv) {
   noise.joint_quantum_deg = args.number("quantum-deg", 0);
   if (noise.length_sigma_mm < 0 || noise.joint_quantum_deg < 0)
     throw UsageError("--noise-mm and --quantum-deg must not be negative");
-  const double bar_mm = args.number("bar-mm", 100);
+  const double bar_mm = args.number("bar-mm", kDefaultBarMm);
   const double extension_mm = args.number("extension-mm", 0);
   const long points = args.integer("points-per-shell", 90);
   if (bar_mm + extension_mm <= 0) throw UsageError("--bar-mm plus --extension-mm must be positive");

@@ -18,7 +18,7 @@ Eigen::MatrixXd shellJacobian(const Model& model, const std::string& connections
   for (const Connection& c : parseConnections(connections)) {
     ShellRequest req;
     req.connection = c;
-    req.radius_mm = 100;
+    req.radius_mm = kDefaultBarMm;
     req.points = 60;
     const auto poses = shellPoses(model, req, rng);
     const auto shell = measureShell(model, req, poses.poses, MeasurementNoise{0, 0}, rng);

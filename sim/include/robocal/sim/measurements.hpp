@@ -21,9 +21,12 @@ struct PerturbationSigmas {
 
 Model perturbModel(const Model& nominal, const PerturbationSigmas& sigmas, std::mt19937_64& rng);
 
+// Length of the reference cell's ball-bar at zero deflection, without extension.
+inline constexpr double kDefaultBarMm = 150.0;
+
 struct ShellRequest {
   Connection connection;
-  double radius_mm = 100;  // bar nominal length + extension
+  double radius_mm = kDefaultBarMm;  // bar nominal length + extension
   double extension_mm = 0;
   int points = 90;  // wanted data points on the shell's grid
   int shell = 1;    // number written to the samples

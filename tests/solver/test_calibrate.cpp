@@ -1,0 +1,174 @@
+#include <catch2/catch.hpp>
+
+#include <robocal/kinematics/kinematics.hpp>
+#include <robocal/kinematics/puma560.hpp>
+#include <robocal/sim/measurements.hpp>
+#include <robocal/solver/calibrate.hpp>
+
+using namespace robocal;
+
+namespace {
+
+struct Shells {
+  std::vector<ShellRequest> requests;
+  std::vector<std::vector<ShellPose>> poses;
+};
+
+// Poses of the nominal model on shells of the given connections (radius kDefaultBarMm + extension).
+Shells planShells(const Model& nominal, const std::string& connections, double extension_mm,
+                  int points, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  Shells out;
+  int shell = 1;
+  for (const Connection& c : parseConnections(connections)) {
+    ShellRequest req;
+    req.connection = c;
+    req.radius_mm = kDefaultBarMm + extension_mm;
+    req.extension_mm = extension_mm;
+    req.points = points;
+    req.shell = shell++;
+    out.poses.push_back(shellPoses(nominal, req, rng).poses);
+    out.requests.push_back(req);
+  }
+  return out;
+}
+
+std::vector<Sample> measure(const Model& truth, const Shells& shells, double noise_mm,
+                            unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::vector<Sample> all;
+  for (size_t i = 0; i < shells.requests.size(); ++i) {
+    auto s = measureShell(truth, shells.requests[i], shells.poses[i], {noise_mm, 0}, rng);
+    all.insert(all.end(), s.begin(), s.end());
+  }
+  return all;
+}
+
+Model perturbed(double factor, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  PerturbationSigmas s;
+  s.translation_mm *= factor;
+  s.link_angle_deg *= factor;
+  s.joint_offset_deg *= factor;
+  s.gain *= factor;
+  return perturbModel(puma560NominalModel(), s, rng);
+}
+
+double ballErrorRms(const Model& a, const Model& b, const std::vector<Sample>& samples) {
+  const Kinematics ka(a), kb(b);
+  double sum = 0;
+  for (const Sample& s : samples) {
+    const auto& ball = a.balls_mm[s.ball_index];
+    sum +=
+        (ka.ballPosition(s.joints_deg, ball) - kb.ballPosition(s.joints_deg, ball)).squaredNorm();
+  }
+  return std::sqrt(sum / samples.size());
+}
+
+}  // namespace
+
+TEST_CASE("LM converges from the nominal to a truth several mm and tenths of a degree away") {
+  const Model nominal = puma560NominalModel();
+  const Model truth = perturbed(5.0, 21);  // 1 mm translations, 0.1-0.25 deg angles
+  const Shells shells = planShells(nominal, "all", 0, 60, 1);
+  const auto samples = measure(truth, shells, 0.0, 2);
+  const SolveResult fit = solveCalibration(nominal, samples);
+  CHECK(fit.identifiability.rank == 36);
+  CHECK(fit.free_params.size() == 36);
+  CHECK(fit.before.rms_mm > 1.0);
+  CHECK(fit.after.rms_mm < 1e-6);
+  CHECK(fit.covariance.allFinite());
+  // Redundant parameters never move from their start values.
+  for (int i : fit.identifiability.redundant) CHECK(fit.params[i] == toParams(nominal)[i]);
+  // The fitted model puts the balls where the truth has them, also on other (larger) shells.
+  const auto validation = measure(truth, planShells(nominal, "all", 150, 40, 3), 0.0, 4);
+  CHECK(ballErrorRms(withParams(nominal, fit.params), truth, validation) < 1e-4);
+}
+
+TEST_CASE("with noise the fit reaches the noise floor and predicts held-out shells") {
+  const Model nominal = puma560NominalModel();
+  const Model truth = perturbed(1.0, 31);
+  const double sigma = 0.084;
+  const auto samples = measure(truth, planShells(nominal, "all", 0, 90, 5), sigma, 6);
+  const auto held_out = measure(truth, planShells(nominal, "all", 150, 90, 7), sigma, 8);
+  const SolveResult fit = solveCalibration(nominal, samples);
+  const double m = static_cast<double>(samples.size());
+  const double expected_rms = sigma * std::sqrt((m - 36) / m);
+  CHECK(fit.after.rms_mm == Approx(expected_rms).epsilon(0.05));
+  CHECK(fit.sigma_mm == Approx(sigma).epsilon(0.08));
+  const auto v = residualStats(sampleResiduals(withParams(nominal, fit.params), held_out));
+  CHECK(v.rms_mm <= 1.10 * sigma);
+  CHECK(fit.condition_number > 1);
+  CHECK(fit.o3 > 0);
+}
+
+TEST_CASE("the reported covariance predicts the real ball-position error (50 noise draws)") {
+  const Model nominal = puma560NominalModel();
+  const Model truth = perturbed(1.0, 41);
+  const Shells shells = planShells(nominal, "all", 0, 90, 9);
+  const auto validation = measure(truth, planShells(nominal, "all", 150, 30, 10), 0.0, 11);
+  double actual = 0, predicted = 0;
+  const int draws = 50;
+  for (int d = 0; d < draws; ++d) {
+    const auto samples = measure(truth, shells, 0.084, 100 + d);
+    const SolveResult fit = solveCalibration(nominal, samples);
+    const Model calibrated = withParams(nominal, fit.params);
+    actual += std::pow(ballErrorRms(calibrated, truth, validation), 2);
+    double pred = 0;
+    for (double e : predictedBallErrors(calibrated, fit.covariance, validation)) pred += e * e;
+    predicted += pred / validation.size();
+  }
+  // Mean squared ball-position error against what sigma^2 (J^T J)^+ predicts: within 15%.
+  CHECK(actual / draws == Approx(predicted / draws).epsilon(0.15));
+}
+
+TEST_CASE("rank-deficient data: the identifiable part is solved and the rank reported") {
+  const Model nominal = puma560NominalModel();
+  const Model truth = perturbed(1.0, 51);
+  SECTION("one shell only") {
+    const auto samples = measure(truth, planShells(nominal, "B2C3", 0, 90, 12), 0.0, 13);
+    const SolveResult fit = solveCalibration(nominal, samples);
+    CHECK(fit.identifiability.rank < 36);
+    CHECK(fit.identifiability.rank == static_cast<int>(fit.free_params.size()));
+    CHECK(fit.params.allFinite());
+    CHECK(fit.after.rms_mm < 0.01 * fit.before.rms_mm);
+  }
+  SECTION("every sample at one pose") {
+    auto samples = measure(truth, planShells(nominal, "B1C1", 0, 1, 14), 0.0, 15);
+    REQUIRE(samples.size() == 1);
+    samples.resize(20, samples.front());
+    const SolveResult fit = solveCalibration(nominal, samples);
+    CHECK(fit.identifiability.rank == 1);
+    CHECK(fit.params.allFinite());
+    CHECK(fit.covariance.allFinite());
+    CHECK(fit.after.rms_mm < 1e-6);
+  }
+}
+
+TEST_CASE("converges when the nominal is 20 mm off") {
+  const Model truth = puma560NominalModel();
+  Model start = truth;
+  start.links[2].x_mm += 20.0;  // the upper arm 20 mm too long
+  const auto samples = measure(truth, planShells(truth, "all", 0, 50, 16), 0.0, 17);
+  const SolveResult fit = solveCalibration(start, samples);
+  CHECK(fit.before.rms_mm > 5.0);
+  CHECK(fit.after.rms_mm < 1e-6);
+  CHECK(fit.params[linkParamIndex(2)] == Approx(truth.links[2].x_mm).margin(1e-6));
+}
+
+TEST_CASE("an outlier is found by its residual") {
+  const Model nominal = puma560NominalModel();
+  const Model truth = perturbed(1.0, 61);
+  auto samples = measure(truth, planShells(nominal, "all", 0, 60, 18), 0.084, 19);
+  samples[123].length_mm += 1.5;  // a bumped bar
+  const SolveResult fit = solveCalibration(nominal, samples);
+  const auto outliers = findOutliers(fit.residuals, 4.0);
+  REQUIRE(outliers.size() >= 1);
+  CHECK(std::any_of(outliers.begin(), outliers.end(),
+                    [](const Outlier& o) { return o.index == 123; }));
+  CHECK(outliers.size() <= 3);
+}
+
+TEST_CASE("no samples is a clear error") {
+  CHECK_THROWS_AS(solveCalibration(puma560NominalModel(), {}), std::invalid_argument);
+}
