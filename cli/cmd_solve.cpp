@@ -23,7 +23,7 @@ nominal model. The parameters the data cannot identify stay at their nominal val
   --out FILE              calibrated model to write (model format)
   --validate FILE         held-out samples: RMS with the calibrated model, no refit
   --report DIR            write report.json and the residual figures (SVG) to DIR
-  --outlier-sigmas K      report samples beyond K robust sigmas                   [4]
+  --outlier-sigmas K      report samples beyond K robust sigmas                   [5]
   --drop-outliers         drop the reported outliers and refit (listed, never silent)
   --truth FILE            a simulation's true model: report the ball-position error
                           of the nominal and calibrated models against it
@@ -51,7 +51,7 @@ int run(const std::vector<std::string>& argv) {
     samples.insert(samples.end(), more.begin(), more.end());
   }
   if (samples.empty()) throw UsageError("the samples files hold no samples");
-  const double k = args.number("outlier-sigmas", 4.0);
+  const double k = args.number("outlier-sigmas", 5.0);
   if (k <= 0) throw UsageError("--outlier-sigmas must be positive");
   SolveOptions options;
   options.max_iterations = static_cast<int>(args.integer("max-iterations", 100));

@@ -21,3 +21,9 @@ echo "== validation shells with the 150 mm extension bar, same true robot"
 "$bin" simulate --model "$model" --truth "$out/truth.json" --seed 8 --noise-mm 0.084 \
   --connections all --extension-mm 150 --points-per-shell 90 --first-shell 10 \
   --out "$out/validation.csv"
+echo
+echo "== identification: Levenberg-Marquardt from the nominal model, validated on the extension set"
+"$bin" solve --model "$model" "$out/samples.csv" --out "$out/calibrated.json" \
+  --validate "$out/validation.csv" --truth "$out/truth.json" --report "$out/report"
+echo
+echo "Done: calibrated model $out/calibrated.json, report $out/report/ (report.json and SVG figures)."
