@@ -64,7 +64,7 @@ ShellPoses shellPoses(const Model& model, const ShellRequest& req, std::mt19937_
   const Eigen::Vector3d chuck = model.chucks_mm[req.connection.chuck_index];
   const Eigen::Vector3d ball_in_tool = model.balls_mm[req.connection.ball_index];
   const Eigen::Vector3d shoulder = kin.chainFrames(JointsDeg::Zero())[0].translation();
-  std::uniform_real_distribution<double> roll_dist(-150.0, 150.0), tilt_dist(-30.0, 30.0);
+  std::uniform_real_distribution<double> roll_dist(-180.0, 180.0), tilt_dist(-45.0, 45.0);
 
   const auto [lats, lons] = gridSize(req.points);
   ShellPoses out;
