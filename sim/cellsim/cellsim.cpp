@@ -1,0 +1,753 @@
+#include "cellsim.hpp"
+
+#include <robocal/drivers/errors.hpp>
+#include <robocal/drivers/transport.hpp>
+#include <robocal/formats/model_json.hpp>
+#include <robocal/kinematics/kinematics.hpp>
+#include <robocal/kinematics/sample.hpp>
+
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/local/stream_protocol.hpp>
+#include <boost/asio/posix/stream_descriptor.hpp>
+#include <boost/asio/read_until.hpp>
+#include <boost/asio/signal_set.hpp>
+#include <boost/asio/steady_timer.hpp>
+#include <boost/asio/streambuf.hpp>
+#include <boost/asio/write.hpp>
+
+#include <fcntl.h>
+#include <stdlib.h>
+#include <termios.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <deque>
+#include <functional>
+#include <istream>
+#include <memory>
+#include <numbers>
+#include <random>
+#include <regex>
+#include <sstream>
+#include <stdexcept>
+
+namespace robocal::cellsim {
+namespace {
+
+namespace asio = boost::asio;
+using drivers::Clock;
+using drivers::Joints6;
+
+double secondsSince(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+speed_t speedFor(int baud) {
+  switch (baud) {
+    case 1200:
+      return B1200;
+    case 2400:
+      return B2400;
+    case 4800:
+      return B4800;
+    case 9600:
+      return B9600;
+    case 19200:
+      return B19200;
+    case 38400:
+      return B38400;
+    case 57600:
+      return B57600;
+    case 115200:
+      return B115200;
+    default:
+      return B9600;
+  }
+}
+
+// What a receiver at the wrong baud rate makes of text: bytes, but not text.
+std::string garble(std::string_view bytes) {
+  std::string out;
+  for (char c : bytes)
+    out.push_back(static_cast<char>(((static_cast<unsigned char>(c) * 7) ^ 0xA5) | 0x80));
+  return out;
+}
+
+// One pty pair: the simulator holds the master (and a slave descriptor, so that the pty survives
+// drivers opening and closing the slave); drivers open the slave by its path or the symlink.
+class PtyPort {
+ public:
+  using BytesHandler = std::function<void(std::string_view)>;
+  PtyPort(asio::io_context& io, std::string name, std::string link, int baud)
+      : io_(io), name_(std::move(name)), link_(std::move(link)), baud_(baud), master_(io) {}
+  ~PtyPort() { close(); }
+
+  void setHandler(BytesHandler h) { handler_ = std::move(h); }
+  bool isOpen() const { return master_.is_open(); }
+  const std::string& slavePath() const { return slave_path_; }
+  const std::string& name() const { return name_; }
+
+  void open() {
+    const int m = ::posix_openpt(O_RDWR | O_NOCTTY | O_CLOEXEC);
+    if (m < 0 || ::grantpt(m) != 0 || ::unlockpt(m) != 0)
+      throw std::runtime_error(name_ + ": cannot create a pseudo-terminal");
+    char path[256];
+    if (::ptsname_r(m, path, sizeof path) != 0) throw std::runtime_error(name_ + ": no pty name");
+    slave_path_ = path;
+    slave_fd_ = ::open(path, O_RDWR | O_NOCTTY | O_CLOEXEC);
+    if (slave_fd_ < 0) throw std::runtime_error(name_ + ": cannot open " + slave_path_);
+    termios t{};
+    ::tcgetattr(slave_fd_, &t);
+    ::cfmakeraw(&t);
+    ::cfsetispeed(&t, speedFor(baud_));
+    ::cfsetospeed(&t, speedFor(baud_));
+    ::tcsetattr(slave_fd_, TCSANOW, &t);
+    master_.assign(m);
+    if (!link_.empty()) {
+      const std::string tmp = link_ + ".new";
+      ::unlink(tmp.c_str());
+      if (::symlink(slave_path_.c_str(), tmp.c_str()) != 0 ||
+          ::rename(tmp.c_str(), link_.c_str()) != 0)
+        throw std::runtime_error(name_ + ": cannot create the link " + link_);
+    }
+    alive_ = std::make_shared<int>(0);
+    read();
+  }
+
+  // An unplugged adapter: the pty goes away (drivers see a hang-up) and so does the link.
+  void close() {
+    alive_.reset();
+    boost::system::error_code ec;
+    if (master_.is_open()) master_.close(ec);
+    if (slave_fd_ >= 0) ::close(slave_fd_);
+    slave_fd_ = -1;
+    if (!link_.empty()) ::unlink(link_.c_str());
+    queue_.clear();
+    writing_ = false;
+  }
+
+  // The slave is set to another baud rate than the device's.
+  bool baudMismatch() const {
+    if (slave_fd_ < 0) return false;
+    termios t{};
+    if (::tcgetattr(slave_fd_, &t) != 0) return false;
+    return ::cfgetospeed(&t) != speedFor(baud_);
+  }
+
+  void write(std::string bytes) {
+    if (!isOpen() || bytes.empty()) return;
+    if (baudMismatch()) bytes = garble(bytes);
+    if (queue_.size() > 256) return;  // nobody reads: the bytes go nowhere, as on a real line
+    queue_.push_back(std::move(bytes));
+    if (!writing_) writeNext();
+  }
+
+ private:
+  void read() {
+    std::weak_ptr<int> alive = alive_;
+    master_.async_read_some(asio::buffer(buf_),
+                            [this, alive](const boost::system::error_code& ec, std::size_t n) {
+                              if (alive.expired()) return;
+                              if (ec) {
+                                if (ec != asio::error::operation_aborted)
+                                  std::fprintf(stderr, "cellsim: %s: read error: %s\n",
+                                               name_.c_str(), ec.message().c_str());
+                                return;
+                              }
+                              if (handler_) handler_(std::string_view(buf_.data(), n));
+                              if (!alive.expired() && isOpen()) read();
+                            });
+  }
+
+  void writeNext() {
+    if (queue_.empty()) {
+      writing_ = false;
+      return;
+    }
+    writing_ = true;
+    std::weak_ptr<int> alive = alive_;
+    asio::async_write(master_, asio::buffer(queue_.front()),
+                      [this, alive](const boost::system::error_code& ec, std::size_t) {
+                        if (alive.expired()) return;
+                        queue_.pop_front();
+                        if (ec) {
+                          queue_.clear();
+                          writing_ = false;
+                          return;
+                        }
+                        writeNext();
+                      });
+  }
+
+  asio::io_context& io_;
+  std::string name_, link_;
+  int baud_;
+  asio::posix::stream_descriptor master_;
+  int slave_fd_ = -1;
+  std::string slave_path_;
+  std::deque<std::string> queue_;
+  bool writing_ = false;
+  std::array<char, 1024> buf_{};
+  BytesHandler handler_;
+  std::shared_ptr<int> alive_;
+};
+
+struct BrokenEvent {
+  double time_s;
+  std::string connection;
+  double deflection_mm;
+};
+
+class Cell {
+ public:
+  Cell(asio::io_context& io, const Options& o, const drivers::DriversConfig& config,
+       const Model& truth)
+      : io_(io),
+        o_(o),
+        val_dialect_(config.val),
+        bar_config_(config.bar),
+        truth_(truth),
+        kin_(truth),
+        rng_(o.seed),
+        val_(io, "val", o.val_link, o.val_baud),
+        bar_(io, "bar", o.bar_link, o.bar_baud),
+        tick_(io),
+        stream_timer_(io),
+        start_time_(Clock::now()) {
+    if (!o.bar_mode.empty()) bar_config_.mode = o.bar_mode;
+    drivers::validate(bar_config_);
+    joints_ = o.start_joints_deg;
+    speed_ = o.speed_percent;
+    move_re_ = drivers::templateRegex(config.val.move_joints_command, move_fields_);
+    std::vector<std::string> unused;
+    where_re_ = drivers::templateRegex(config.val.where_command, unused);
+    abort_re_ = drivers::templateRegex(config.val.abort_command, unused);
+    speed_re_ = drivers::templateRegex(config.val.speed_command, unused);
+    connectBar(o.connection, o.extension_mm, o.bar_here ? -1 : o.bar_mm);
+    val_.setHandler([this](std::string_view b) { valBytes(b); });
+    bar_.setHandler([this](std::string_view b) { barBytes(b); });
+  }
+
+  void start() {
+    val_.open();
+    bar_.open();
+    std::printf("val %s%s\nbar %s%s\n", val_.slavePath().c_str(),
+                o_.val_link.empty() ? "" : (" -> " + o_.val_link).c_str(), bar_.slavePath().c_str(),
+                o_.bar_link.empty() ? "" : (" -> " + o_.bar_link).c_str());
+    std::fflush(stdout);
+    tick();
+    if (bar_config_.mode == "streamed") stream();
+  }
+
+  void shutdown() {
+    val_.close();
+    bar_.close();
+    tick_.cancel();
+    stream_timer_.cancel();
+  }
+
+  // ------------------------------------------------------------------------------ control
+  std::string control(const std::string& text) {
+    std::istringstream in(text);
+    std::vector<std::string> w;
+    for (std::string s; in >> s;) w.push_back(s);
+    if (w.empty()) return "error: empty command";
+    const auto port = [&](const std::string& name) -> PtyPort& {
+      if (name == "val") return val_;
+      if (name == "bar") return bar_;
+      throw std::invalid_argument("no device '" + name + "' (val or bar)");
+    };
+    const auto seconds = [&](std::size_t i, double fallback) {
+      return w.size() > i ? std::stod(w[i]) : fallback;
+    };
+    try {
+      if (w[0] == "status") return "ok " + status();
+      if (w[0] == "quit") {
+        io_.stop();
+        return "ok bye";
+      }
+      if (w[0] == "estop") {
+        estop();
+        return "ok estop";
+      }
+      if (w[0] == "reset") {
+        estop_ = false;
+        return "ok reset";
+      }
+      if (w[0] == "connect" && w.size() >= 2) {
+        double ext = 0, bar = o_.bar_mm;
+        for (std::size_t i = 2; i < w.size(); ++i) {
+          const auto eq = w[i].find('=');
+          const std::string key = w[i].substr(0, eq),
+                            value = eq == std::string::npos ? "" : w[i].substr(eq + 1);
+          if (key == "extension_mm")
+            ext = std::stod(value);
+          else if (key == "bar_mm")
+            bar = value == "here" ? -1 : std::stod(value);
+          else
+            throw std::invalid_argument("unknown connect option '" + key + "'");
+        }
+        connectBar(w[1], ext, bar);
+        return "ok " + status();
+      }
+      if (w[0] == "fault" && w.size() >= 2) {
+        const std::string& f = w[1];
+        if (f == "garbage")
+          garbage_next_ = true;
+        else if (f == "drop")
+          drop_next_ = true;
+        else if (f == "noprobe")
+          no_probe_ = !(w.size() > 2 && w[2] == "off");
+        else if (f == "error") {
+          std::string msg;
+          for (std::size_t i = 2; i < w.size(); ++i) msg += (msg.empty() ? "" : " ") + w[i];
+          error_next_ = msg.empty() ? o_.val_error_text : msg;
+        } else if (f == "stall" && w.size() >= 3) {
+          stallUntil(w[2]) = Clock::now() + toDuration(seconds(3, o_.stall_s));
+        } else if (f == "disconnect" && w.size() >= 3) {
+          disconnect(port(w[2]), seconds(3, o_.reconnect_after_s));
+        } else {
+          return "error: unknown fault (garbage, drop, noprobe [off], error [TEXT], stall val|bar "
+                 "S, "
+                 "disconnect val|bar S)";
+        }
+        return "ok fault " + f;
+      }
+    } catch (const std::exception& e) {
+      return std::string("error: ") + e.what();
+    }
+    return "error: unknown command (status, connect B1C1 [extension_mm=E] [bar_mm=L|here], estop, "
+           "reset, fault ..., quit)";
+  }
+
+  const std::vector<BrokenEvent>& events() const { return events_; }
+
+ private:
+  static Clock::duration toDuration(double s) {
+    return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+  }
+  Clock::time_point& stallUntil(const std::string& device) {
+    if (device == "val") return val_stall_until_;
+    if (device == "bar") return bar_stall_until_;
+    throw std::invalid_argument("no device '" + device + "' (val or bar)");
+  }
+
+  std::string status() const {
+    char buf[512];
+    bool connected = false;
+    const double d = deflection(connected);
+    std::snprintf(buf, sizeof buf,
+                  "joints_deg=%.3f,%.3f,%.3f,%.3f,%.3f,%.3f moving=%d estop=%d speed=%.0f "
+                  "connection=%s bar_mm=%.3f extension_mm=%.3f deflection_mm=%.4f "
+                  "broken_events=%zu val=%s bar=%s",
+                  joints_[0], joints_[1], joints_[2], joints_[3], joints_[4], joints_[5],
+                  moving_ ? 1 : 0, estop_ ? 1 : 0, speed_, connection_name_.c_str(), bar_mm_,
+                  extension_mm_, connected ? d : 0.0, events_.size(),
+                  val_.isOpen() ? val_.slavePath().c_str() : "-",
+                  bar_.isOpen() ? bar_.slavePath().c_str() : "-");
+    return buf;
+  }
+
+  void connectBar(const std::string& name, double extension_mm, double bar_mm) {
+    if (name == "none") {
+      connected_ = false;
+      connection_name_ = "none";
+      over_ = false;
+      return;
+    }
+    const auto list = parseConnections(name);
+    if (list.size() != 1) throw std::invalid_argument("connect one ball to one chuck, e.g. B1C2");
+    connection_ = list[0];
+    connected_ = true;
+    connection_name_ = connectionName(connection_);
+    extension_mm_ = extension_mm;
+    // bar_mm < 0: a bar of exactly the current length (handy for tests and demos).
+    bar_mm_ = bar_mm >= 0 ? bar_mm : trueLength() - extension_mm;
+    over_ = false;
+    checkBar();
+  }
+
+  double trueLength() const {
+    JointsDeg j;
+    for (int i = 0; i < 6; ++i) j[i] = joints_[i];
+    return kin_.barLength(j, truth_.balls_mm[connection_.ball_index],
+                          truth_.chucks_mm[connection_.chuck_index]);
+  }
+
+  double deflection(bool& connected) const {
+    connected = connected_;
+    return connected_ ? trueLength() - bar_mm_ - extension_mm_ : 0.0;
+  }
+
+  void checkBar() {
+    bool connected = false;
+    const double d = deflection(connected);
+    if (!connected) return;
+    if (std::abs(d) > o_.range_mm) {
+      if (!over_) {
+        events_.push_back({secondsSince(start_time_), connection_name_, d});
+        std::fprintf(stderr,
+                     "cellsim: THE BAR WOULD HAVE BROKEN: %s %s by %.3f mm (range +/-%.3f mm) at "
+                     "joints %.3f %.3f %.3f %.3f %.3f %.3f\n",
+                     connection_name_.c_str(), d > 0 ? "stretched" : "compressed", std::abs(d),
+                     o_.range_mm, joints_[0], joints_[1], joints_[2], joints_[3], joints_[4],
+                     joints_[5]);
+      }
+      over_ = true;
+    } else {
+      over_ = false;
+    }
+  }
+
+  // ------------------------------------------------------------------------------ robot
+  void tick() {
+    if (moving_) {
+      const double t = secondsSince(move_t0_);
+      const double s = move_duration_s_ > 0 ? std::min(1.0, t / move_duration_s_) : 1.0;
+      for (int i = 0; i < 6; ++i) joints_[i] = move_from_[i] + (target_[i] - move_from_[i]) * s;
+      if (s >= 1.0) moving_ = false;
+      if (estop_at_ && t >= *estop_at_) {
+        estop_at_.reset();
+        estop();
+      }
+    }
+    checkBar();
+    tick_.expires_after(std::chrono::milliseconds(5));
+    tick_.async_wait([this](const boost::system::error_code& ec) {
+      if (!ec) tick();
+    });
+  }
+
+  void estop() {
+    moving_ = false;
+    estop_ = true;
+    estop_at_.reset();
+    std::fprintf(stderr, "cellsim: E-STOP\n");
+    if (Clock::now() >= val_stall_until_)
+      val_.write(o_.val_eol + drivers::ValDialect::formatError("Arm power off") + o_.val_eol +
+                 val_dialect_.config().prompt);
+  }
+
+  Joints6 quantised() const {
+    Joints6 q = joints_;
+    if (o_.quantum_deg > 0)
+      for (double& v : q) v = std::round(v / o_.quantum_deg) * o_.quantum_deg;
+    return q;
+  }
+
+  drivers::Location6 location() const {
+    JointsDeg j;
+    for (int i = 0; i < 6; ++i) j[i] = joints_[i];
+    const Eigen::Isometry3d pose = kin_.toolPose(j);
+    const Eigen::Vector3d oat = pose.linear().eulerAngles(2, 1, 2) * (180.0 / std::numbers::pi);
+    const Eigen::Vector3d p = pose.translation();
+    return {p.x(), p.y(), p.z(), oat[0], oat[1], oat[2]};
+  }
+
+  // ------------------------------------------------------------------------------ VAL II
+  void valBytes(std::string_view bytes) {
+    if (val_.baudMismatch()) {
+      val_.write(std::string(bytes));  // the echo, garbled on the way back
+      return;
+    }
+    if (Clock::now() < val_stall_until_) return;  // a hung controller loses its input
+    std::string echo;
+    for (char c : bytes) {
+      if (c == '\r' || c == '\n') {
+        const bool second_half = c == '\n' && val_after_cr_;
+        val_after_cr_ = c == '\r';
+        if (second_half) continue;
+        std::string line = std::move(val_line_);
+        val_line_.clear();
+        if (o_.val_echo) val_.write(std::move(echo));
+        echo.clear();
+        valLine(line);
+        if (!val_.isOpen()) return;
+      } else {
+        val_after_cr_ = false;
+        val_line_.push_back(c);
+        echo.push_back(c);
+      }
+    }
+    if (o_.val_echo) val_.write(std::move(echo));
+  }
+
+  void valLine(const std::string& raw) {
+    const std::string line = drivers::trim(raw);
+    const std::string& eol = o_.val_eol;
+    const std::string& prompt = val_dialect_.config().prompt;
+    if (line.empty()) {
+      val_.write(eol + prompt);
+      return;
+    }
+    ++val_commands_;
+    if (o_.val_disconnect_after > 0 && val_commands_ == o_.val_disconnect_after + 1) {
+      disconnect(val_, o_.reconnect_after_s);
+      return;
+    }
+    if (o_.val_stall_after > 0 && val_commands_ == o_.val_stall_after + 1) {
+      val_stall_until_ = Clock::now() + toDuration(o_.stall_s);
+      std::fprintf(stderr, "cellsim: val stalls for %.1f s\n", o_.stall_s);
+      return;
+    }
+    std::vector<std::string> lines;
+    if (o_.val_error_on_command > 0 && val_commands_ == o_.val_error_on_command)
+      error_next_ = o_.val_error_text;
+    if (!error_next_.empty()) {
+      lines.push_back(drivers::ValDialect::formatError(error_next_));
+      error_next_.clear();
+    } else {
+      lines = valCommand(line);
+    }
+    std::string out = eol;
+    for (const auto& l : lines) out += l + eol;
+    val_.write(out + prompt);
+  }
+
+  std::vector<std::string> valCommand(const std::string& line) {
+    using drivers::ValDialect;
+    std::smatch m;
+    if (std::regex_match(line, m, where_re_))
+      return drivers::formatWhere(val_dialect_.config(), o_.where_layout, location(), quantised());
+    if (std::regex_match(line, m, abort_re_)) {
+      moving_ = false;
+      estop_at_.reset();
+      return {};
+    }
+    if (std::regex_match(line, m, speed_re_)) {
+      const double s = std::stod(m[1].str());
+      if (!(s > 0 && s <= 100)) return {ValDialect::formatError("Invalid speed")};
+      speed_ = s;
+      return {};
+    }
+    if (std::regex_match(line, m, move_re_)) {
+      if (estop_) return {ValDialect::formatError("Arm power off")};
+      Joints6 target{};
+      for (std::size_t i = 0; i < move_fields_.size(); ++i)
+        target[std::stoi(move_fields_[i].substr(1)) - 1] = std::stod(m[i + 1].str());
+      for (int k = 0; k < 6; ++k)
+        if (target[k] < truth_.joints[k].min_deg || target[k] > truth_.joints[k].max_deg)
+          return {ValDialect::formatError("Position out of range")};
+      ++moves_;
+      move_from_ = joints_;
+      target_ = target;
+      double longest = 0;
+      for (int k = 0; k < 6; ++k) longest = std::max(longest, std::abs(target[k] - joints_[k]));
+      move_duration_s_ = longest / (o_.joint_speed_deg_s * speed_ / 100.0 * o_.time_scale);
+      move_t0_ = Clock::now();
+      moving_ = true;
+      if (o_.estop_on_move > 0 && moves_ == o_.estop_on_move) estop_at_ = move_duration_s_ / 2;
+      return {};
+    }
+    return {ValDialect::formatError("Unknown command")};
+  }
+
+  // ------------------------------------------------------------------------------ ball-bar
+  void barBytes(std::string_view bytes) {
+    if (bar_.baudMismatch()) return;  // garbled commands are not understood
+    if (Clock::now() < bar_stall_until_) return;
+    std::vector<std::string> lines;
+    bar_splitter_.feed(bytes, lines);
+    if (bar_config_.mode != "polled") return;
+    for (const auto& l : lines)
+      if (drivers::toUpper(drivers::trim(l)) == drivers::toUpper(bar_config_.poll_command))
+        barLine();
+  }
+
+  void stream() {
+    barLine();
+    stream_timer_.expires_after(toDuration(1.0 / o_.stream_hz));
+    stream_timer_.async_wait([this](const boost::system::error_code& ec) {
+      if (!ec) stream();
+    });
+  }
+
+  void barLine() {
+    if (!bar_.isOpen() || Clock::now() < bar_stall_until_) return;
+    ++bar_lines_;
+    if (o_.bar_disconnect_after > 0 && bar_lines_ == o_.bar_disconnect_after + 1) {
+      disconnect(bar_, o_.reconnect_after_s);
+      return;
+    }
+    if (o_.bar_stall_after > 0 && bar_lines_ == o_.bar_stall_after + 1) {
+      bar_stall_until_ = Clock::now() + toDuration(o_.stall_s);
+      return;
+    }
+    if (drop_next_ || (o_.bar_drop_every > 0 && bar_lines_ % o_.bar_drop_every == 0)) {
+      drop_next_ = false;
+      return;
+    }
+    std::string line = barText();
+    const std::string eol = "\r\n";
+    if (garbage_next_ || (o_.bar_garbage_every > 0 && bar_lines_ % o_.bar_garbage_every == 0)) {
+      garbage_next_ = false;
+      ++garbage_count_;
+      std::uniform_int_distribution<int> pos(0, static_cast<int>(line.size()));
+      if (garbage_count_ % 2 == 1) {
+        // Noise on the line: bytes that are not text inside the reading.
+        line.insert(static_cast<std::size_t>(pos(rng_)), std::string("\x93\xF1\x02\xFE", 4));
+      } else {
+        // A line cut short: the rest of it is lost, the next one runs into it.
+        bar_.write(line.substr(0, static_cast<std::size_t>(pos(rng_))) + "\xC3");
+        line = barText();
+      }
+    }
+    bar_.write(line + eol);
+  }
+
+  std::string barText() {
+    using drivers::BarLineKind;
+    if (no_probe_ || o_.bar_no_probe) return drivers::formatBarStatus(BarLineKind::kNoProbe);
+    bool connected = false;
+    const double d = deflection(connected);
+    if (connected && std::abs(d) > o_.range_mm)
+      return drivers::formatBarStatus(BarLineKind::kOverRange, d < 0);
+    std::normal_distribution<double> noise(0.0, o_.noise_mm);
+    const double value_mm = d + (o_.noise_mm > 0 ? noise(rng_) : 0.0);
+    return drivers::formatBarReading(bar_config_.format, value_mm / bar_config_.unit_scale_mm);
+  }
+
+  void disconnect(PtyPort& port, double reconnect_after_s) {
+    std::fprintf(stderr, "cellsim: %s disconnected for %.2f s\n", port.name().c_str(),
+                 reconnect_after_s);
+    port.close();
+    if (&port == &val_) val_line_.clear();
+    auto timer = std::make_shared<asio::steady_timer>(io_, toDuration(reconnect_after_s));
+    timer->async_wait([this, &port, timer](const boost::system::error_code& ec) {
+      if (ec) return;
+      port.open();
+      std::printf("%s %s\n", port.name().c_str(), port.slavePath().c_str());
+      std::fflush(stdout);
+    });
+  }
+
+  asio::io_context& io_;
+  const Options& o_;
+  drivers::ValDialect val_dialect_;
+  drivers::BarConfig bar_config_;
+  Model truth_;
+  Kinematics kin_;
+  std::mt19937_64 rng_;
+  PtyPort val_, bar_;
+  asio::steady_timer tick_, stream_timer_;
+  Clock::time_point start_time_;
+
+  // robot
+  Joints6 joints_{}, target_{}, move_from_{};
+  bool moving_ = false, estop_ = false;
+  Clock::time_point move_t0_{};
+  double move_duration_s_ = 0, speed_ = 50;
+  std::optional<double> estop_at_;  // seconds into the current move
+  long moves_ = 0;
+  // VAL II
+  std::regex move_re_, where_re_, abort_re_, speed_re_;
+  std::vector<std::string> move_fields_;
+  std::string val_line_;
+  bool val_after_cr_ = false;
+  long val_commands_ = 0;
+  Clock::time_point val_stall_until_{}, bar_stall_until_{};
+  std::string error_next_;
+  // bar
+  Connection connection_;
+  bool connected_ = false, over_ = false, no_probe_ = false;
+  std::string connection_name_ = "none";
+  double bar_mm_ = 100, extension_mm_ = 0;
+  std::vector<BrokenEvent> events_;
+  drivers::LineSplitter bar_splitter_;
+  long bar_lines_ = 0, garbage_count_ = 0;
+  bool garbage_next_ = false, drop_next_ = false;
+};
+
+// Line commands from a stream (a unix-socket client or stdin), one reply line each.
+template <typename Stream>
+class ControlSession : public std::enable_shared_from_this<ControlSession<Stream>> {
+ public:
+  ControlSession(Stream stream, Cell& cell) : stream_(std::move(stream)), cell_(cell) {}
+  void start() { read(); }
+
+ private:
+  void read() {
+    auto self = this->shared_from_this();
+    asio::async_read_until(
+        stream_, buffer_, '\n', [self](const boost::system::error_code& ec, std::size_t) {
+          if (ec) return;
+          std::istream in(&self->buffer_);
+          std::string line;
+          std::getline(in, line);
+          self->reply_ = self->cell_.control(line) + "\n";
+          asio::async_write(self->stream_, asio::buffer(self->reply_),
+                            [self](const boost::system::error_code& e, std::size_t) {
+                              if (!e) self->read();
+                            });
+        });
+  }
+  Stream stream_;
+  Cell& cell_;
+  asio::streambuf buffer_;
+  std::string reply_;
+};
+
+void accept(asio::local::stream_protocol::acceptor& acceptor, Cell& cell) {
+  acceptor.async_accept([&acceptor, &cell](const boost::system::error_code& ec,
+                                           asio::local::stream_protocol::socket socket) {
+    if (ec) return;
+    std::make_shared<ControlSession<asio::local::stream_protocol::socket>>(std::move(socket), cell)
+        ->start();
+    accept(acceptor, cell);
+  });
+}
+
+}  // namespace
+
+int run(const Options& o) {
+  const Model truth = loadModelFile(o.model_path);
+  const drivers::DriversConfig config =
+      o.config_path.empty() ? drivers::DriversConfig{} : drivers::loadDriversConfig(o.config_path);
+  asio::io_context io;
+  Cell cell(io, o, config, truth);
+  cell.start();
+
+  std::unique_ptr<asio::local::stream_protocol::acceptor> acceptor;
+  if (!o.control_path.empty()) {
+    ::unlink(o.control_path.c_str());
+    acceptor = std::make_unique<asio::local::stream_protocol::acceptor>(
+        io, asio::local::stream_protocol::endpoint(o.control_path));
+    accept(*acceptor, cell);
+    std::printf("control %s\n", o.control_path.c_str());
+  }
+  if (o.stdin_control) {
+    asio::posix::stream_descriptor in(io, ::dup(STDIN_FILENO));
+    // stdin replies go to stdout: wrap a duplex pair would need two descriptors; use a session
+    // over stdin for reading and print replies directly.
+    auto buffer = std::make_shared<asio::streambuf>();
+    auto stdin_stream = std::make_shared<asio::posix::stream_descriptor>(std::move(in));
+    std::function<void()> next;
+    next = [&, buffer, stdin_stream]() {
+      asio::async_read_until(*stdin_stream, *buffer, '\n',
+                             [&, buffer](const boost::system::error_code& ec, std::size_t) {
+                               if (ec) return;
+                               std::istream is(buffer.get());
+                               std::string line;
+                               std::getline(is, line);
+                               std::printf("%s\n", cell.control(line).c_str());
+                               std::fflush(stdout);
+                               next();
+                             });
+    };
+    next();
+  }
+  std::printf("ready\n");
+  std::fflush(stdout);
+
+  asio::signal_set signals(io, SIGINT, SIGTERM);
+  signals.async_wait([&](const boost::system::error_code&, int) { io.stop(); });
+  io.run();
+  cell.shutdown();
+  if (!o.control_path.empty()) ::unlink(o.control_path.c_str());
+  std::fprintf(stderr, "cellsim: stopped; %zu bar-would-have-broken event(s)\n",
+               cell.events().size());
+  return 0;
+}
+
+}  // namespace robocal::cellsim
