@@ -1,0 +1,89 @@
+// The cell file's settings (docs/cell-format.md): the bar, the connections and their order, the
+// shell grid, the tool-orientation policy, the safety margins, the motion and the model
+// uncertainty the plan's deflection forecast assumes. Plain data in mm, deg and s; no I/O.
+#pragma once
+
+#include <robocal/kinematics/sample.hpp>
+
+#include <string>
+#include <vector>
+
+namespace robocal {
+
+struct BarSettings {
+  double nominal_length_mm = 100;  // ball centre to chuck centre at zero deflection
+  std::vector<double> extension_lengths_mm = {0, 150};  // one set of shells per extension
+  double max_deflection_mm = 2.0;                       // the LVDT reads +/- this much
+};
+
+struct GridSettings {
+  double latitude_first_deg = 10, latitude_last_deg = 80, latitude_step_deg = 10;
+  double longitude_first_deg = 0, longitude_step_deg = 30;  // around the whole circle
+};
+
+// The tool axis (flange z) at a data point: it reaches away from joint 1's axis, `pitch` below
+// the horizontal and turned `yaw` out of the arm's vertical plane (which keeps joint 5 away from
+// zero); both vary over the shell by their amplitudes, and the tool rolls about its axis by
+// roll +/- roll_variation. When the bar would come closer than min_bar_tool_angle_deg to the
+// tool's axis, the axis is turned toward the chuck until it does not.
+struct ToolOrientationPolicy {
+  double approach_pitch_deg = 45;
+  double pitch_variation_deg = 15;
+  double approach_yaw_deg = 35;
+  double yaw_variation_deg = 15;
+  double roll_deg = 0;
+  double roll_variation_deg = 60;
+  double min_bar_tool_angle_deg = 70;
+};
+
+struct SafetyMargins {
+  double joint_limit_deg = 5;            // kept inside every joint limit
+  double wrist_singularity_deg = 10;     // |theta5| from 0 (and 180)
+  double elbow_singularity_deg = 10;     // elbow bend from the straight arm
+  double shoulder_singularity_mm = 100;  // wrist centre from joint 1's axis plane
+  double table_clearance_mm = 30;        // flange and wrist centre above the chucks' plane z = 0
+};
+
+struct MotionSettings {
+  double joint_speed_deg_per_s = 20;  // speed of the fastest joint on a joint-interpolated move
+  double move_overhead_s = 0.5;       // per move: acceleration, settling of the command, polling
+  double settle_s = 2.0;              // dwell at each data point before recording
+  double via_tolerance_mm = 0.5;      // nominal radial deviation allowed along every segment
+  double sample_step_mm = 0.5;        // ball spacing when segments are checked (<= 1 mm)
+};
+
+// Model error assumed by the plan's forecast of the bar's deflection: Gaussian perturbations of
+// the 54 parameters (as `robocal simulate` makes its true robots), `models` of them.
+struct ModelUncertainty {
+  double translation_sigma_mm = 0.2;
+  double link_angle_sigma_deg = 0.02;
+  double joint_offset_sigma_deg = 0.05;
+  double gain_sigma = 0.0005;
+  int models = 20;
+  int seed = 1;
+};
+
+struct CellConfig {
+  std::string name;
+  BarSettings bar;
+  std::vector<Connection> connections = allConnections();  // in the order they are run
+  GridSettings grid;
+  ToolOrientationPolicy tool;
+  // "auto" (per shell, the configuration that reaches the most points) or a name such as
+  // "right-up-noflip" (see armConfigName).
+  std::string arm_configuration = "auto";
+  double connect_lat_deg = 90, connect_lon_deg = 0;  // where the operator attaches the bar
+  SafetyMargins margins;
+  MotionSettings motion;
+  ModelUncertainty uncertainty;
+};
+
+// Latitudes and longitudes of the grid (deg), in increasing order; empty when the grid is empty.
+std::vector<double> gridLatitudes(const GridSettings& grid);
+std::vector<double> gridLongitudes(const GridSettings& grid);
+
+// Throws std::invalid_argument naming the key ("motion.via_tolerance_mm: ...") of the first
+// setting that is out of range or inconsistent with the others.
+void validateCell(const CellConfig& cell);
+
+}  // namespace robocal

@@ -1,0 +1,162 @@
+// The off-line plan: for each connection and extension a shell of data points on the sphere of
+// radius L around the chuck, joined by via points so that the joint-interpolated motion keeps the
+// bar within its tolerance for the nominal model. No I/O (plan_json.hpp reads and writes plans).
+#pragma once
+
+#include <robocal/kinematics/kinematics.hpp>
+#include <robocal/kinematics/sample.hpp>
+#include <robocal/planner/cell.hpp>
+#include <robocal/planner/puma_ik.hpp>
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace robocal {
+
+// Settings that cannot give a plan (radius out of reach, empty grid, impossible margins).
+class PlanError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+enum class StepKind { kVia, kPoint };
+
+struct PlanStep {
+  StepKind kind = StepKind::kPoint;
+  JointsDeg joints_deg = JointsDeg::Zero();
+  double lat_deg = 0, lon_deg = 0;  // where the ball is on the shell (vias too)
+};
+
+struct DroppedPoint {
+  double lat_deg = 0, lon_deg = 0;
+  std::string reason;
+};
+
+struct ShellSummary {
+  int points = 0, vias = 0;
+  double duration_s = 0;                // moves at the configured speed plus dwells
+  double max_deviation_mm = 0;          // nominal radial deviation, worst over all segments
+  double predicted_deflection_mm = -1;  // worst |deflection| with model error; < 0: not computed
+};
+
+struct ShellPlan {
+  int shell = 1;  // 1-based number, written to the samples
+  Connection connection;
+  double extension_mm = 0;
+  double radius_mm = 0;  // bar nominal length + extension
+  ArmConfig config;
+  PlanStep connect;  // where the operator attaches the bar (a "point" kind, not measured)
+  std::vector<PlanStep> steps;
+  std::vector<DroppedPoint> dropped;
+  ShellSummary summary;
+};
+
+struct PlanSummary {
+  int shells = 0, points = 0, vias = 0, dropped = 0;
+  double duration_s = 0;
+  double max_deviation_mm = 0;
+  double predicted_deflection_mm = -1;  // worst over shells; < 0: not computed
+  int rank = 0, expected_rank = 36;     // identification Jacobian of all the plan's points
+  double condition_number = 0;          // of the column-scaled Jacobian on its identified part
+};
+
+struct Plan {
+  std::string model_name;
+  CellConfig cell;  // the settings used
+  std::vector<ShellPlan> shells;
+  PlanSummary summary;
+};
+
+// One pose of a segment, with everything the safety rules look at.
+struct PoseReport {
+  double deviation_mm = 0;        // |ball - chuck| - radius, nominal model
+  double bar_tool_angle_deg = 0;  // between the bar (ball to chuck) and the tool's backward axis
+  double min_height_mm = 0;       // lowest of the flange and the wrist centre (z)
+  SingularityMargins singularity;
+  Eigen::Vector3d ball_mm = Eigen::Vector3d::Zero();
+};
+
+// Plans shells for one model and cell. Construction checks the settings (PlanError); planning a
+// shell is independent of the others and the planner is immutable (thread-safe).
+class ShellPlanner {
+ public:
+  ShellPlanner(const Model& model, const CellConfig& cell);
+
+  const Model& model() const { return ik_.model(); }
+  const CellConfig& cell() const { return cell_; }
+  const PumaIk& ik() const { return ik_; }
+
+  ShellPlan planShell(const Connection& connection, double extension_mm, int shell_number) const;
+
+  // Re-plans what is left of `shell` for this planner's model (e.g. one refined from the data
+  // measured so far): steps[0 .. next_step-1] are kept as they are; the data points from
+  // next_step on keep their latitude and longitude, get new joints (numerical refinement seeded
+  // with the old ones) and new vias, starting from `current_joints` (where the robot is now, on
+  // the shell with the bar attached). Points that fail are dropped.
+  ShellPlan replanRemaining(const ShellPlan& shell, std::size_t next_step,
+                            const JointsDeg& current_joints) const;
+
+  // The tool pose the orientation policy gives at (lat, lon) of the shell. When that pose is not
+  // safe, the planner tries others: the approach turned about the vertical by `yaw_offset_deg`,
+  // tilted by `pitch_offset_deg` and rolled by `roll_offset_deg`.
+  Eigen::Isometry3d policyPose(const Connection& connection, double radius_mm, double lat_deg,
+                               double lon_deg, double yaw_offset_deg = 0,
+                               double pitch_offset_deg = 0, double roll_offset_deg = 0) const;
+
+  PoseReport inspect(const Connection& connection, double radius_mm, const JointsDeg& q) const;
+  // Empty when the pose keeps every rule (limits minus margin, singularity margins, bar-tool
+  // angle, table clearance, |deviation| <= tolerance), else the first rule it breaks.
+  std::string poseProblem(const Connection& connection, double radius_mm, const JointsDeg& q,
+                          double tolerance_mm) const;
+
+  // The ball positions along the joint-interpolated segment a -> b, spaced at most
+  // motion.sample_step_mm apart (both ends included).
+  std::vector<JointsDeg> segmentSamples(const Connection& connection, const JointsDeg& a,
+                                        const JointsDeg& b) const;
+
+  // Time of a joint-interpolated move (s), without dwell.
+  double moveDuration(const JointsDeg& a, const JointsDeg& b) const;
+
+ private:
+  struct Node;
+  bool planArc(const Connection& c, double radius, const ArmConfig& config, const Node& a,
+               const Node& b, int depth, std::vector<PlanStep>& vias, double& worst,
+               std::string& why) const;
+  bool segmentOk(const Connection& c, double radius, const JointsDeg& a, const JointsDeg& b,
+                 double tolerance_mm, double& worst, std::string& why) const;
+  void finishShell(ShellPlan& shell) const;
+  Node nodeFor(const Connection& c, double radius, double lat_deg, double lon_deg,
+               const Eigen::Isometry3d& pose, const JointsDeg& q) const;
+
+  PumaIk ik_;
+  CellConfig cell_;
+  Eigen::Vector3d joint1_origin_;
+  Eigen::Isometry3d tool_inv_;
+};
+
+// Plans every shell of the cell: for each extension, each connection in order. Shell numbers
+// count from 1 over the whole plan. Throws PlanError when the settings give no plan.
+Plan planCell(const Model& model, const CellConfig& cell);
+
+// The plan's data points as samples (lengths from the model, i.e. zero residual).
+std::vector<Sample> planSamples(const Model& model, const Plan& plan);
+
+// Rank and condition number of the identification Jacobian of the plan's points (all shells, or
+// only those with the given extension when extension_mm >= 0).
+struct PlanIdentifiability {
+  int points = 0, rank = 0, expected_rank = 36;
+  double condition_number = 0;
+};
+PlanIdentifiability planIdentifiability(const Model& model, const Plan& plan,
+                                        double extension_mm = -1);
+
+// Worst |bar deflection| per shell for the given true robots: at every step, the true distance
+// minus the radius, plus the segment's nominal deviation either side (an upper bound along the
+// moves). Sets summary.predicted_deflection_mm of every shell and of the plan.
+void predictDeflections(const Model& nominal, const std::vector<Model>& truths, Plan& plan);
+
+// Fills the plan summary's totals from its shells (not rank or deflection).
+void summarizePlan(Plan& plan);
+
+}  // namespace robocal

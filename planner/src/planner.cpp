@@ -1,0 +1,745 @@
+#include <robocal/planner/plan.hpp>
+
+#include <robocal/kinematics/ik.hpp>
+#include <robocal/solver/identifiability.hpp>
+#include <robocal/solver/problem.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+
+namespace robocal {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+constexpr double kRadPerDeg = kPi / 180.0;
+constexpr double kDegPerRad = 180.0 / kPi;
+// The planner aims below the tolerance so that a re-check (which samples the same way) has room.
+constexpr double kPlannerToleranceFraction = 0.9;
+constexpr int kMaxBisections = 10;      // 2^10 vias at most between two data points
+constexpr double kSteerExtraDeg = 5.0;  // the policy keeps the bar this far past its minimum angle
+constexpr int kCoarseSamples = 8;
+
+std::string fmt(const char* format, double a, double b = 0, double c = 0) {
+  char buf[200];
+  std::snprintf(buf, sizeof buf, format, a, b, c);
+  return buf;
+}
+
+Eigen::Vector3d unitOnSphere(double lat_deg, double lon_deg) {
+  const double lat = lat_deg * kRadPerDeg, lon = lon_deg * kRadPerDeg;
+  return {std::cos(lat) * std::cos(lon), std::cos(lat) * std::sin(lon), std::sin(lat)};
+}
+
+void latLonOf(const Eigen::Vector3d& n, double& lat_deg, double& lon_deg) {
+  lat_deg = std::asin(std::clamp(n.z(), -1.0, 1.0)) * kDegPerRad;
+  lon_deg = std::atan2(n.y(), n.x()) * kDegPerRad;
+  if (lon_deg < 0) lon_deg += 360.0;
+  if (std::abs(n.x()) < 1e-12 && std::abs(n.y()) < 1e-12) lon_deg = 0;
+}
+
+Eigen::Vector3d slerp(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double t) {
+  const double angle = std::acos(std::clamp(a.dot(b), -1.0, 1.0));
+  if (angle < 1e-9) return a;
+  Eigen::Vector3d v;
+  if (angle > kPi - 1e-6) {  // antipodal: go over the pole of the shell
+    const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
+    Eigen::Vector3d mid = (up - up.dot(a) * a);
+    if (mid.norm() < 1e-9) mid = Eigen::Vector3d::UnitX() - a.x() * a;
+    mid.normalize();
+    const double phi = t * kPi;
+    return std::cos(phi) * a + std::sin(phi) * mid;
+  }
+  v = (std::sin((1 - t) * angle) * a + std::sin(t * angle) * b) / std::sin(angle);
+  return v.normalized();
+}
+
+struct Offset {
+  double yaw, pitch, roll;
+};
+
+double offsetDistance(const Offset& a, const Offset& b) {
+  return std::abs(std::remainder(a.yaw - b.yaw, 360.0)) / 45.0 +
+         std::abs(a.pitch - b.pitch) / 20.0 +
+         std::abs(std::remainder(a.roll - b.roll, 360.0)) / 90.0;
+}
+
+// Tool orientations tried when the policy's own is not safe, nearest first.
+const std::vector<Offset>& candidateOffsets() {
+  static const std::vector<Offset> list = [] {
+    std::vector<Offset> v;
+    for (double yaw : {0.0, 45.0, -45.0, 90.0, -90.0, 135.0, -135.0, 180.0})
+      for (double pitch : {0.0, 25.0, -20.0})
+        for (double roll : {0.0, 90.0, -90.0, 180.0}) v.push_back({yaw, pitch, roll});
+    std::stable_sort(v.begin(), v.end(), [](const Offset& a, const Offset& b) {
+      return offsetDistance(a, {0, 0, 0}) < offsetDistance(b, {0, 0, 0});
+    });
+    return v;
+  }();
+  return list;
+}
+
+}  // namespace
+
+struct ShellPlanner::Node {
+  Eigen::Vector3d n;  // unit vector from the chuck to the ball
+  Eigen::Quaterniond rotation;
+  JointsDeg q;
+  double lat_deg, lon_deg;
+};
+
+ShellPlanner::ShellPlanner(const Model& model, const CellConfig& cell)
+    : ik_([&] {
+        try {
+          return PumaIk(model);
+        } catch (const std::invalid_argument& e) {
+          throw PlanError(e.what());
+        }
+      }()),
+      cell_(cell) {
+  try {
+    validateCell(cell);
+  } catch (const std::invalid_argument& e) {
+    throw PlanError(std::string("cell: ") + e.what());
+  }
+  for (int j = 0; j < kJointCount; ++j) {
+    const JointParams& jp = model.joints[j];
+    if (jp.max_deg - jp.min_deg <= 2 * cell.margins.joint_limit_deg)
+      throw PlanError(fmt("cell: margins.joint_limit_deg: %.1f deg leaves no range for joint %.0f "
+                          "(limits %.1f .. ",
+                          cell.margins.joint_limit_deg, j + 1.0, jp.min_deg) +
+                      fmt("%.1f deg)", jp.max_deg));
+  }
+  joint1_origin_ = linkTransform(model.links[0]).translation();
+  tool_inv_ = linkTransform(model.links[6]).inverse();
+}
+
+Eigen::Isometry3d ShellPlanner::policyPose(const Connection& c, double radius, double lat_deg,
+                                           double lon_deg, double yaw_offset_deg,
+                                           double pitch_offset_deg, double roll_offset_deg) const {
+  const ToolOrientationPolicy& p = cell_.tool;
+  const Eigen::Vector3d n = unitOnSphere(lat_deg, lon_deg);
+  const Eigen::Vector3d ball = model().chucks_mm[c.chuck_index] + radius * n;
+  Eigen::Vector3d h = ball - joint1_origin_;
+  h.z() = 0;
+  h = h.norm() > 1e-6 ? h.normalized() : Eigen::Vector3d::UnitX();
+  const Eigen::Vector3d side(-h.y(), h.x(), 0);
+  const double lat = lat_deg * kRadPerDeg, lon = lon_deg * kRadPerDeg;
+  const double pitch =
+      (p.approach_pitch_deg + pitch_offset_deg + p.pitch_variation_deg * std::sin(2 * lon + lat)) *
+      kRadPerDeg;
+  const double yaw =
+      (p.approach_yaw_deg + yaw_offset_deg + p.yaw_variation_deg * std::sin(lon - 2 * lat)) *
+      kRadPerDeg;
+  const double roll =
+      (p.roll_deg + roll_offset_deg + p.roll_variation_deg * std::sin(lon + 3 * lat)) * kRadPerDeg;
+  Eigen::Vector3d a = std::cos(pitch) * (std::cos(yaw) * h + std::sin(yaw) * side) -
+                      std::sin(pitch) * Eigen::Vector3d::UnitZ();
+  // Keep the bar (direction -n from the ball) away from the tool's backward axis (-a).
+  const double keep = (p.min_bar_tool_angle_deg + kSteerExtraDeg) * kRadPerDeg;
+  if (n.dot(a) > std::cos(keep)) {
+    Eigen::Vector3d t = a - a.dot(n) * n;
+    t = t.norm() > 1e-9 ? t.normalized() : side;
+    a = std::cos(keep) * n + std::sin(keep) * t;
+  }
+  a.normalize();
+  Eigen::Vector3d x0 = Eigen::Vector3d::UnitZ() - a.z() * a;
+  if (x0.norm() < 1e-6) x0 = h - h.dot(a) * a;
+  x0.normalize();
+  const Eigen::Vector3d x = Eigen::AngleAxisd(roll, a) * x0;
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear().col(0) = x;
+  pose.linear().col(1) = a.cross(x);
+  pose.linear().col(2) = a;
+  pose.translation() = ball - pose.linear() * model().balls_mm[c.ball_index];
+  return pose;
+}
+
+PoseReport ShellPlanner::inspect(const Connection& c, double radius, const JointsDeg& q) const {
+  PoseReport r;
+  const Eigen::Isometry3d pose = ik_.kinematics().toolPose(q);
+  const Eigen::Vector3d chuck = model().chucks_mm[c.chuck_index];
+  r.ball_mm = pose * model().balls_mm[c.ball_index];
+  const Eigen::Vector3d bar = chuck - r.ball_mm;
+  r.deviation_mm = bar.norm() - radius;
+  const Eigen::Vector3d back = -pose.linear().col(2);
+  r.bar_tool_angle_deg = std::acos(std::clamp(bar.normalized().dot(back), -1.0, 1.0)) * kDegPerRad;
+  r.min_height_mm = std::min(pose.translation().z(), (pose * tool_inv_).translation().z());
+  r.singularity = ik_.singularityMargins(q);
+  return r;
+}
+
+std::string ShellPlanner::poseProblem(const Connection& c, double radius, const JointsDeg& q,
+                                      double tolerance_mm) const {
+  if (!q.allFinite()) return "joints are not finite numbers";
+  const SafetyMargins& m = cell_.margins;
+  for (int j = 0; j < kJointCount; ++j) {
+    const JointParams& jp = model().joints[j];
+    if (q[j] < jp.min_deg + m.joint_limit_deg || q[j] > jp.max_deg - m.joint_limit_deg)
+      return fmt("joint %.0f at %.2f deg is not %.1f deg inside its limits", j + 1.0, q[j],
+                 m.joint_limit_deg);
+  }
+  const PoseReport r = inspect(c, radius, q);
+  if (r.singularity.wrist_deg < m.wrist_singularity_deg)
+    return fmt("wrist %.2f deg from singular (margin %.1f deg)", r.singularity.wrist_deg,
+               m.wrist_singularity_deg);
+  if (r.singularity.elbow_deg < m.elbow_singularity_deg)
+    return fmt("elbow %.2f deg from singular (margin %.1f deg)", r.singularity.elbow_deg,
+               m.elbow_singularity_deg);
+  if (r.singularity.shoulder_mm < m.shoulder_singularity_mm)
+    return fmt("wrist centre %.1f mm from the shoulder singularity (margin %.1f mm)",
+               r.singularity.shoulder_mm, m.shoulder_singularity_mm);
+  if (r.bar_tool_angle_deg < cell_.tool.min_bar_tool_angle_deg)
+    return fmt("bar %.1f deg from the tool axis (minimum %.1f deg)", r.bar_tool_angle_deg,
+               cell_.tool.min_bar_tool_angle_deg);
+  if (r.min_height_mm < m.table_clearance_mm)
+    return fmt("flange or wrist centre %.1f mm above the table plane (minimum %.1f mm)",
+               r.min_height_mm, m.table_clearance_mm);
+  if (std::abs(r.deviation_mm) > tolerance_mm)
+    return fmt("bar deviation %+.3f mm beyond +/-%.3f mm", r.deviation_mm, tolerance_mm);
+  return {};
+}
+
+std::vector<JointsDeg> ShellPlanner::segmentSamples(const Connection& c, const JointsDeg& a,
+                                                    const JointsDeg& b) const {
+  const Kinematics& kin = ik_.kinematics();
+  const Eigen::Vector3d ball = model().balls_mm[c.ball_index];
+  const double step = cell_.motion.sample_step_mm;
+  double length = 0;
+  Eigen::Vector3d prev = kin.ballPosition(a, ball);
+  for (int i = 1; i <= kCoarseSamples; ++i) {
+    const Eigen::Vector3d p = kin.ballPosition(a + (b - a) * (double(i) / kCoarseSamples), ball);
+    length += (p - prev).norm();
+    prev = p;
+  }
+  int n = std::max(1, static_cast<int>(std::ceil(1.3 * length / step)));
+  std::vector<JointsDeg> out;
+  for (int attempt = 0; attempt < 8; ++attempt, n *= 2) {
+    out.clear();
+    out.reserve(n + 1);
+    bool spaced = true;
+    prev = kin.ballPosition(a, ball);
+    out.push_back(a);
+    for (int i = 1; i <= n && spaced; ++i) {
+      const JointsDeg q = a + (b - a) * (double(i) / n);
+      const Eigen::Vector3d p = kin.ballPosition(q, ball);
+      spaced = (p - prev).norm() <= step;
+      prev = p;
+      out.push_back(q);
+    }
+    if (spaced) break;
+  }
+  return out;
+}
+
+bool ShellPlanner::segmentOk(const Connection& c, double radius, const JointsDeg& a,
+                             const JointsDeg& b, double tolerance_mm, double& worst,
+                             std::string& why) const {
+  worst = 0;
+  // A cheap look first: most failing segments fail at one of a few samples.
+  for (int i = 1; i < kCoarseSamples; ++i) {
+    const JointsDeg q = a + (b - a) * (double(i) / kCoarseSamples);
+    const std::string problem = poseProblem(c, radius, q, tolerance_mm);
+    if (!problem.empty()) {
+      why = problem;
+      return false;
+    }
+  }
+  for (const JointsDeg& q : segmentSamples(c, a, b)) {
+    const std::string problem = poseProblem(c, radius, q, tolerance_mm);
+    if (!problem.empty()) {
+      why = problem;
+      return false;
+    }
+    worst = std::max(worst, std::abs(inspect(c, radius, q).deviation_mm));
+  }
+  return true;
+}
+
+ShellPlanner::Node ShellPlanner::nodeFor(const Connection& c, double radius, double lat_deg,
+                                         double lon_deg, const Eigen::Isometry3d& pose,
+                                         const JointsDeg& q) const {
+  (void)radius;
+  Node node;
+  const Eigen::Vector3d ball = pose * model().balls_mm[c.ball_index];
+  node.n = (ball - model().chucks_mm[c.chuck_index]).normalized();
+  node.rotation = Eigen::Quaterniond(pose.linear());
+  node.q = q;
+  node.lat_deg = lat_deg;
+  node.lon_deg = lon_deg;
+  return node;
+}
+
+bool ShellPlanner::planArc(const Connection& c, double radius, const ArmConfig& config,
+                           const Node& a, const Node& b, int depth, std::vector<PlanStep>& vias,
+                           double& worst, std::string& why) const {
+  double seg_worst = 0;
+  if (segmentOk(c, radius, a.q, b.q, kPlannerToleranceFraction * cell_.motion.via_tolerance_mm,
+                seg_worst, why)) {
+    worst = std::max(worst, seg_worst);
+    return true;
+  }
+  if (depth >= kMaxBisections) return false;
+  Node mid;
+  mid.n = slerp(a.n, b.n, 0.5);
+  latLonOf(mid.n, mid.lat_deg, mid.lon_deg);
+  Eigen::Quaterniond qa = a.rotation, qb = b.rotation;
+  if (qa.dot(qb) < 0) qb.coeffs() *= -1;
+  // The interpolated orientation first; when it is not safe, the policy's orientations at the
+  // via's place, nearest to the interpolated one first.
+  std::vector<Eigen::Quaterniond> rotations = {qa.slerp(0.5, qb)};
+  {
+    std::vector<std::pair<double, Eigen::Quaterniond>> others;
+    for (const Offset& off : candidateOffsets()) {
+      const Eigen::Quaterniond r(
+          policyPose(c, radius, mid.lat_deg, mid.lon_deg, off.yaw, off.pitch, off.roll).linear());
+      others.push_back({r.angularDistance(rotations[0]), r});
+    }
+    std::stable_sort(others.begin(), others.end(),
+                     [](const auto& x, const auto& y) { return x.first < y.first; });
+    for (size_t i = 0; i < others.size() && i < 6; ++i) rotations.push_back(others[i].second);
+  }
+  bool found = false;
+  for (size_t r = 0; r < rotations.size() && !found; ++r) {
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.linear() = rotations[r].toRotationMatrix();
+    pose.translation() = model().chucks_mm[c.chuck_index] + radius * mid.n -
+                         pose.linear() * model().balls_mm[c.ball_index];
+    const IkSolution s = ik_.solve(pose, config, &a.q);
+    const std::string problem =
+        s.ok() ? poseProblem(c, radius, s.joints_deg, cell_.motion.via_tolerance_mm)
+               : std::string(ikStatusName(s.status));
+    if (!problem.empty()) {
+      if (r == 0) why = fmt("via at lat %.1f lon %.1f deg: ", mid.lat_deg, mid.lon_deg) + problem;
+      continue;
+    }
+    mid.q = s.joints_deg;
+    mid.rotation = rotations[r];
+    found = true;
+  }
+  if (!found) return false;
+  if (!planArc(c, radius, config, a, mid, depth + 1, vias, worst, why)) return false;
+  vias.push_back({StepKind::kVia, mid.q, mid.lat_deg, mid.lon_deg});
+  return planArc(c, radius, config, mid, b, depth + 1, vias, worst, why);
+}
+
+double ShellPlanner::moveDuration(const JointsDeg& a, const JointsDeg& b) const {
+  return (b - a).cwiseAbs().maxCoeff() / cell_.motion.joint_speed_deg_per_s +
+         cell_.motion.move_overhead_s;
+}
+
+void ShellPlanner::finishShell(ShellPlan& shell) const {
+  ShellSummary& s = shell.summary;
+  s.points = s.vias = 0;
+  s.duration_s = 0;
+  JointsDeg prev = shell.connect.joints_deg;
+  for (const PlanStep& step : shell.steps) {
+    (step.kind == StepKind::kPoint ? s.points : s.vias)++;
+    s.duration_s += moveDuration(prev, step.joints_deg);
+    if (step.kind == StepKind::kPoint) s.duration_s += cell_.motion.settle_s;
+    prev = step.joints_deg;
+  }
+}
+
+ShellPlan ShellPlanner::planShell(const Connection& c, double extension_mm,
+                                  int shell_number) const {
+  ShellPlan shell;
+  shell.shell = shell_number;
+  shell.connection = c;
+  shell.extension_mm = extension_mm;
+  shell.radius_mm = cell_.bar.nominal_length_mm + extension_mm;
+  const double radius = shell.radius_mm;
+  const double tol = cell_.motion.via_tolerance_mm;
+
+  std::vector<double> lats = gridLatitudes(cell_.grid);
+  const std::vector<double> lons = gridLongitudes(cell_.grid);
+  if (lats.empty() || lons.empty()) throw PlanError("cell: grid: the grid is empty");
+  // Rings from the one nearest the connect pose.
+  if (std::abs(cell_.connect_lat_deg - lats.back()) < std::abs(cell_.connect_lat_deg - lats[0]))
+    std::reverse(lats.begin(), lats.end());
+  const size_t nlat = lats.size(), nlon = lons.size();
+
+  struct Attempt {
+    IkSolution ik;
+    std::string problem;
+  };
+  auto attempt = [&](double lat, double lon, const Offset& off, const ArmConfig& config,
+                     const JointsDeg* near) {
+    Attempt a;
+    a.ik = ik_.solve(policyPose(c, radius, lat, lon, off.yaw, off.pitch, off.roll), config, near);
+    a.problem = a.ik.ok() ? poseProblem(c, radius, a.ik.joints_deg, tol)
+                          : std::string("IK: ") + ikStatusName(a.ik.status);
+    return a;
+  };
+  const std::vector<Offset>& offsets = candidateOffsets();
+
+  // The arm configuration: the policy's own orientations first, then the two best
+  // configurations with the other orientations too.
+  std::vector<int> configs;
+  if (cell_.arm_configuration == "auto") {
+    for (int i = 0; i < kArmConfigCount; ++i) configs.push_back(i);
+  } else {
+    configs.push_back(armConfigIndex(*parseArmConfig(cell_.arm_configuration)));
+  }
+  std::array<int, kArmConfigCount> nominal_count{};
+  std::vector<std::string> nominal_problem(kArmConfigCount * nlat * nlon);
+  for (int ci : configs)
+    for (size_t i = 0; i < nlat; ++i)
+      for (size_t k = 0; k < nlon; ++k) {
+        const Attempt a = attempt(lats[i], lons[k], offsets[0], armConfigFromIndex(ci), nullptr);
+        nominal_problem[(ci * nlat + i) * nlon + k] = a.problem;
+        if (a.problem.empty()) ++nominal_count[ci];
+      }
+  std::stable_sort(configs.begin(), configs.end(),
+                   [&](int a, int b) { return nominal_count[a] > nominal_count[b]; });
+  if (configs.size() > 2) configs.resize(2);
+  int best = configs[0], best_count = -1;
+  std::vector<char> valid(nlat * nlon, 0);
+  for (int ci : configs) {
+    std::vector<char> ok(nlat * nlon, 0);
+    int count = 0;
+    for (size_t i = 0; i < nlat; ++i)
+      for (size_t k = 0; k < nlon; ++k) {
+        if (nominal_problem[(ci * nlat + i) * nlon + k].empty()) {
+          ok[i * nlon + k] = 1;
+        } else {
+          for (size_t o = 1; o < offsets.size() && !ok[i * nlon + k]; ++o)
+            ok[i * nlon + k] =
+                attempt(lats[i], lons[k], offsets[o], armConfigFromIndex(ci), nullptr)
+                    .problem.empty();
+        }
+        count += ok[i * nlon + k];
+      }
+    if (count > best_count) {
+      best = ci;
+      best_count = count;
+      valid = ok;
+    }
+  }
+  shell.config = armConfigFromIndex(best);
+  auto reasonFor = [&](size_t i, size_t k) {
+    return nominal_problem[(best * nlat + i) * nlon + k] + " (and with " +
+           std::to_string(offsets.size() - 1) + " other tool orientations)";
+  };
+
+  // The connect pose: the first safe orientation at the connect latitude and longitude.
+  struct Chosen {
+    double lat, lon;
+    Offset off;
+    JointsDeg q;
+  };
+  std::vector<Chosen> chosen;  // chosen[0] is the connect pose
+  for (const Offset& off : offsets) {
+    const Attempt a =
+        attempt(cell_.connect_lat_deg, cell_.connect_lon_deg, off, shell.config, nullptr);
+    if (a.problem.empty()) {
+      chosen.push_back({cell_.connect_lat_deg, cell_.connect_lon_deg, off, a.ik.joints_deg});
+      break;
+    }
+  }
+
+  // Travel order: ring by ring; a ring with unreachable points starts after its largest gap so
+  // that the path does not cross it; each ring starts near where the previous one ended.
+  Eigen::Vector3d here = chosen.empty()
+                             ? Eigen::Vector3d::UnitZ()
+                             : unitOnSphere(cell_.connect_lat_deg, cell_.connect_lon_deg);
+  std::vector<std::pair<size_t, size_t>> order;
+  for (size_t i = 0; i < nlat; ++i) {
+    std::vector<size_t> ring;
+    size_t gap_len = 0, gap_end = 0;  // largest circular run of unreachable points
+    for (size_t k = 0; k < nlon; ++k) {
+      if (valid[i * nlon + k]) continue;
+      size_t len = 0;
+      while (len < nlon && !valid[i * nlon + (k + len) % nlon]) ++len;
+      if (len > gap_len) {
+        gap_len = len;
+        gap_end = (k + len) % nlon;
+      }
+    }
+    if (gap_len == nlon) {
+      for (size_t k = 0; k < nlon; ++k) order.push_back({i, k});  // all dropped
+      continue;
+    }
+    size_t start = gap_end;
+    if (gap_len == 0) {  // full ring: start at the point nearest to here
+      double best_d = INFINITY;
+      for (size_t k = 0; k < nlon; ++k) {
+        const double d = (unitOnSphere(lats[i], lons[k]) - here).norm();
+        if (d < best_d) {
+          best_d = d;
+          start = k;
+        }
+      }
+    }
+    for (size_t n = 0; n < nlon - gap_len; ++n) ring.push_back((start + n) % nlon);
+    // Go the way whose first point is nearer.
+    if (gap_len > 0 && (unitOnSphere(lats[i], lons[ring.back()]) - here).norm() <
+                           (unitOnSphere(lats[i], lons[ring.front()]) - here).norm())
+      std::reverse(ring.begin(), ring.end());
+    for (size_t k : ring) order.push_back({i, k});
+    for (size_t k = 0; k < nlon; ++k)
+      if (std::find(ring.begin(), ring.end(), k) == ring.end()) order.push_back({i, k});
+    here = unitOnSphere(lats[i], lons[ring.back()]);
+  }
+
+  // Orientation of each point: the safe one nearest to the previous point's.
+  Offset prev_off = chosen.empty() ? offsets[0] : chosen[0].off;
+  std::vector<size_t> sorted(offsets.size());
+  for (const auto& [i, k] : order) {
+    if (!valid[i * nlon + k]) {
+      shell.dropped.push_back({lats[i], lons[k], reasonFor(i, k)});
+      continue;
+    }
+    for (size_t o = 0; o < offsets.size(); ++o) sorted[o] = o;
+    std::stable_sort(sorted.begin(), sorted.end(), [&](size_t a, size_t b) {
+      return offsetDistance(offsets[a], prev_off) + 0.1 * offsetDistance(offsets[a], offsets[0]) <
+             offsetDistance(offsets[b], prev_off) + 0.1 * offsetDistance(offsets[b], offsets[0]);
+    });
+    for (size_t o : sorted) {
+      const Attempt a = attempt(lats[i], lons[k], offsets[o], shell.config, nullptr);
+      if (a.problem.empty()) {
+        chosen.push_back({lats[i], lons[k], offsets[o], a.ik.joints_deg});
+        prev_off = offsets[o];
+        break;
+      }
+    }
+  }
+  if (chosen.empty()) {
+    finishShell(shell);
+    return shell;
+  }
+  const bool connect_is_grid =
+      chosen[0].lat == cell_.connect_lat_deg && chosen[0].lon == cell_.connect_lon_deg &&
+      !(chosen.size() > 1 && chosen[1].lat == chosen[0].lat && chosen[1].lon == chosen[0].lon);
+  if (!connect_is_grid) chosen.insert(chosen.begin(), chosen[0]);  // connect at the first point
+
+  // Joints 4 and 6 turn continuously along the shell; shift the whole sequence by full turns so
+  // that it sits inside the limits minus the margin.
+  for (int j : {3, 5}) {
+    const JointParams& jp = model().joints[j];
+    const double period = 360.0 / std::abs(jp.gain);
+    double lo = chosen[0].q[j], hi = lo;
+    for (size_t n = 1; n < chosen.size(); ++n) {
+      chosen[n].q[j] =
+          chosen[n - 1].q[j] + std::remainder(chosen[n].q[j] - chosen[n - 1].q[j], period);
+      lo = std::min(lo, chosen[n].q[j]);
+      hi = std::max(hi, chosen[n].q[j]);
+    }
+    const double m = cell_.margins.joint_limit_deg;
+    const double centre = 0.5 * ((jp.min_deg + m - lo) + (jp.max_deg - m - hi));
+    const double shift = period * std::round(centre / period);
+    for (Chosen& ch : chosen) ch.q[j] += shift;
+  }
+
+  // Vias between consecutive poses.
+  auto poseOf = [&](const Chosen& ch) {
+    return policyPose(c, radius, ch.lat, ch.lon, ch.off.yaw, ch.off.pitch, ch.off.roll);
+  };
+  Node prev;
+  for (size_t n = 0; n < chosen.size(); ++n) {
+    const Chosen& ch = chosen[n];
+    const Eigen::Isometry3d pose = poseOf(ch);
+    const IkSolution s = ik_.solve(pose, shell.config, &ch.q);
+    const std::string problem = s.ok() ? poseProblem(c, radius, s.joints_deg, tol)
+                                       : std::string("IK: ") + ikStatusName(s.status);
+    if (n == 0) {
+      if (!problem.empty()) {  // cannot happen: the connect pose was checked; keep it safe anyway
+        shell.dropped.push_back({ch.lat, ch.lon, "connect pose: " + problem});
+        finishShell(shell);
+        return shell;
+      }
+      shell.connect = {StepKind::kPoint, s.joints_deg, ch.lat, ch.lon};
+      prev = nodeFor(c, radius, ch.lat, ch.lon, pose, s.joints_deg);
+      continue;
+    }
+    if (!problem.empty()) {
+      shell.dropped.push_back({ch.lat, ch.lon, "after turning joints 4 and 6: " + problem});
+      continue;
+    }
+    Node node = nodeFor(c, radius, ch.lat, ch.lon, pose, s.joints_deg);
+    std::vector<PlanStep> vias;
+    std::string why;
+    bool joined =
+        planArc(c, radius, shell.config, prev, node, 0, vias, shell.summary.max_deviation_mm, why);
+    if (!joined) {
+      // Other orientations at the point, nearest to the previous step's first.
+      std::vector<std::pair<double, Offset>> others;
+      for (const Offset& off : candidateOffsets()) {
+        const Eigen::Quaterniond r(
+            policyPose(c, radius, ch.lat, ch.lon, off.yaw, off.pitch, off.roll).linear());
+        others.push_back({r.angularDistance(prev.rotation), off});
+      }
+      std::stable_sort(others.begin(), others.end(),
+                       [](const auto& x, const auto& y) { return x.first < y.first; });
+      for (size_t o = 0; o < others.size() && o < 8 && !joined; ++o) {
+        const Offset& off = others[o].second;
+        const Eigen::Isometry3d alt =
+            policyPose(c, radius, ch.lat, ch.lon, off.yaw, off.pitch, off.roll);
+        const IkSolution t = ik_.solve(alt, shell.config, &prev.q);
+        if (!t.ok() || !poseProblem(c, radius, t.joints_deg, tol).empty()) continue;
+        node = nodeFor(c, radius, ch.lat, ch.lon, alt, t.joints_deg);
+        vias.clear();
+        std::string ignored;
+        joined = planArc(c, radius, shell.config, prev, node, 0, vias,
+                         shell.summary.max_deviation_mm, ignored);
+      }
+    }
+    if (!joined) {
+      shell.dropped.push_back({ch.lat, ch.lon, "no safe path from the previous step: " + why});
+      continue;
+    }
+    shell.steps.insert(shell.steps.end(), vias.begin(), vias.end());
+    shell.steps.push_back({StepKind::kPoint, node.q, ch.lat, ch.lon});
+    prev = node;
+  }
+  finishShell(shell);
+  return shell;
+}
+
+ShellPlan ShellPlanner::replanRemaining(const ShellPlan& old, std::size_t next_step,
+                                        const JointsDeg& current) const {
+  ShellPlan shell = old;
+  next_step = std::min(next_step, old.steps.size());
+  shell.steps.resize(next_step);
+  shell.summary.max_deviation_mm = 0;
+  const double radius = shell.radius_mm;
+  const Connection c = shell.connection;
+  const Eigen::Isometry3d here = ik_.kinematics().toolPose(current);
+  const Eigen::Vector3d ball = here * model().balls_mm[c.ball_index];
+  double lat, lon;
+  latLonOf((ball - model().chucks_mm[c.chuck_index]).normalized(), lat, lon);
+  Node prev = nodeFor(c, radius, lat, lon, here, current);
+  for (size_t i = next_step; i < old.steps.size(); ++i) {
+    const PlanStep& step = old.steps[i];
+    if (step.kind != StepKind::kPoint) continue;
+    // The old joints' orientation under this model, with the ball put back on the shell.
+    Eigen::Isometry3d pose = ik_.kinematics().toolPose(step.joints_deg);
+    pose.translation() = model().chucks_mm[c.chuck_index] +
+                         radius * unitOnSphere(step.lat_deg, step.lon_deg) -
+                         pose.linear() * model().balls_mm[c.ball_index];
+    IkSolution s = ik_.refine(pose, shell.config, step.joints_deg);
+    if (!s.ok()) s = ik_.solve(pose, shell.config, &prev.q);
+    std::string why = s.ok() ? poseProblem(c, radius, s.joints_deg, cell_.motion.via_tolerance_mm)
+                             : std::string("IK: ") + ikStatusName(s.status);
+    if (!why.empty()) {
+      shell.dropped.push_back({step.lat_deg, step.lon_deg, why});
+      continue;
+    }
+    const Node node = nodeFor(c, radius, step.lat_deg, step.lon_deg, pose, s.joints_deg);
+    std::vector<PlanStep> vias;
+    if (!planArc(c, radius, shell.config, prev, node, 0, vias, shell.summary.max_deviation_mm,
+                 why)) {
+      shell.dropped.push_back(
+          {step.lat_deg, step.lon_deg, "no safe path from the previous step: " + why});
+      continue;
+    }
+    shell.steps.insert(shell.steps.end(), vias.begin(), vias.end());
+    shell.steps.push_back({StepKind::kPoint, s.joints_deg, step.lat_deg, step.lon_deg});
+    prev = node;
+  }
+  finishShell(shell);
+  return shell;
+}
+
+void summarizePlan(Plan& plan) {
+  PlanSummary& s = plan.summary;
+  s.shells = static_cast<int>(plan.shells.size());
+  s.points = s.vias = s.dropped = 0;
+  s.duration_s = s.max_deviation_mm = 0;
+  s.predicted_deflection_mm = -1;
+  for (const ShellPlan& shell : plan.shells) {
+    s.points += shell.summary.points;
+    s.vias += shell.summary.vias;
+    s.dropped += static_cast<int>(shell.dropped.size());
+    s.duration_s += shell.summary.duration_s;
+    s.max_deviation_mm = std::max(s.max_deviation_mm, shell.summary.max_deviation_mm);
+    s.predicted_deflection_mm =
+        std::max(s.predicted_deflection_mm, shell.summary.predicted_deflection_mm);
+  }
+}
+
+Plan planCell(const Model& model, const CellConfig& cell) {
+  const ShellPlanner planner(model, cell);
+  Plan plan;
+  plan.model_name = model.name;
+  plan.cell = cell;
+  int number = 1;
+  for (double extension : cell.bar.extension_lengths_mm)
+    for (const Connection& c : cell.connections)
+      plan.shells.push_back(planner.planShell(c, extension, number++));
+  for (const ShellPlan& shell : plan.shells)
+    if (shell.summary.points == 0) {
+      std::string msg =
+          "shell " + std::to_string(shell.shell) + " (" + connectionName(shell.connection) +
+          fmt(", radius %.1f mm): no grid point can be reached safely", shell.radius_mm);
+      if (!shell.dropped.empty())
+        msg += fmt(" (e.g. lat %.1f lon %.1f deg: ", shell.dropped[0].lat_deg,
+                   shell.dropped[0].lon_deg) +
+               shell.dropped[0].reason + ")";
+      throw PlanError(msg);
+    }
+  summarizePlan(plan);
+  return plan;
+}
+
+std::vector<Sample> planSamples(const Model& model, const Plan& plan) {
+  const Kinematics kin(model);
+  std::vector<Sample> out;
+  for (const ShellPlan& shell : plan.shells)
+    for (const PlanStep& step : shell.steps) {
+      if (step.kind != StepKind::kPoint) continue;
+      Sample s;
+      s.shell = shell.shell;
+      s.ball_index = shell.connection.ball_index;
+      s.chuck_index = shell.connection.chuck_index;
+      s.extension_mm = shell.extension_mm;
+      s.lat_deg = step.lat_deg;
+      s.lon_deg = step.lon_deg;
+      s.joints_deg = step.joints_deg;
+      s.length_mm = kin.barLength(step.joints_deg, model.balls_mm[s.ball_index],
+                                  model.chucks_mm[s.chuck_index]);
+      out.push_back(s);
+    }
+  return out;
+}
+
+PlanIdentifiability planIdentifiability(const Model& model, const Plan& plan, double extension_mm) {
+  std::vector<Sample> samples = planSamples(model, plan);
+  if (extension_mm >= 0)
+    std::erase_if(samples,
+                  [&](const Sample& s) { return std::abs(s.extension_mm - extension_mm) > 1e-9; });
+  PlanIdentifiability out;
+  out.points = static_cast<int>(samples.size());
+  if (samples.empty()) return out;
+  Eigen::VectorXd residuals;
+  Eigen::MatrixXd jacobian;
+  evaluateProblem(model, toParams(model), samples, residuals, &jacobian);
+  const Identifiability id = analyzeIdentifiability(jacobian);
+  out.rank = id.rank;
+  out.expected_rank = id.expected;
+  out.condition_number = id.rank > 0 ? 1.0 / id.singular_values[id.rank - 1] : 0;
+  return out;
+}
+
+void predictDeflections(const Model& nominal, const std::vector<Model>& truths, Plan& plan) {
+  (void)nominal;
+  for (ShellPlan& shell : plan.shells) {
+    double worst = 0;
+    for (const Model& truth : truths) {
+      const Kinematics kin(truth);
+      const Eigen::Vector3d ball = truth.balls_mm[shell.connection.ball_index];
+      const Eigen::Vector3d chuck = truth.chucks_mm[shell.connection.chuck_index];
+      worst = std::max(
+          worst, std::abs(kin.barLength(shell.connect.joints_deg, ball, chuck) - shell.radius_mm));
+      for (const PlanStep& step : shell.steps)
+        worst = std::max(worst,
+                         std::abs(kin.barLength(step.joints_deg, ball, chuck) - shell.radius_mm));
+    }
+    shell.summary.predicted_deflection_mm =
+        truths.empty() ? -1 : worst + shell.summary.max_deviation_mm;
+  }
+  summarizePlan(plan);
+}
+
+}  // namespace robocal
