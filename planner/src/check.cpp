@@ -1,0 +1,121 @@
+#include <robocal/planner/check.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+
+namespace robocal {
+namespace {
+
+constexpr double kRadPerDeg = std::numbers::pi / 180.0;
+constexpr double kPlaceToleranceMm = 1.0;  // ball vs the step's stated lat/lon
+
+std::string ruleOf(const std::string& problem) {
+  if (problem.rfind("joint ", 0) == 0) return "limits";
+  if (problem.rfind("wrist", 0) == 0 && problem.find("singular") != std::string::npos)
+    return "wrist singularity";
+  if (problem.rfind("elbow", 0) == 0) return "elbow singularity";
+  if (problem.find("shoulder singularity") != std::string::npos) return "shoulder singularity";
+  if (problem.rfind("bar ", 0) == 0 && problem.find("tool axis") != std::string::npos)
+    return "bar-tool angle";
+  if (problem.rfind("flange", 0) == 0) return "table clearance";
+  if (problem.rfind("bar deviation", 0) == 0) return "deviation";
+  return "joints";
+}
+
+}  // namespace
+
+std::string describeViolation(const PlanViolation& v) {
+  std::string where = v.shell == 0 ? std::string("plan") : "shell " + std::to_string(v.shell);
+  if (v.shell != 0) where += v.step < 0 ? " connect pose" : " step " + std::to_string(v.step);
+  return where + " (" + v.rule + "): " + v.message;
+}
+
+std::vector<PlanViolation> checkPlan(const Model& model, const CellConfig& cell, const Plan& plan) {
+  const ShellPlanner planner(model, cell);
+  const PumaIk& ik = planner.ik();
+  const double tol = cell.motion.via_tolerance_mm;
+  std::vector<PlanViolation> out;
+  if (plan.shells.empty()) out.push_back({0, -1, "empty", "the plan has no shells"});
+
+  for (const ShellPlan& shell : plan.shells) {
+    auto add = [&](int step, std::string rule, std::string message) {
+      out.push_back({shell.shell, step, std::move(rule), std::move(message)});
+    };
+    const Connection c = shell.connection;
+    if (c.ball_index < 0 || c.ball_index >= kBallCount || c.chuck_index < 0 ||
+        c.chuck_index >= kChuckCount) {
+      add(-1, "connection", "no such ball or chuck");
+      continue;
+    }
+    bool known_extension = false;
+    for (double e : cell.bar.extension_lengths_mm)
+      known_extension |= std::abs(e - shell.extension_mm) < 1e-6;
+    if (!known_extension)
+      add(-1, "extension",
+          "extension " + std::to_string(shell.extension_mm) + " mm is not one of the cell's");
+    const double radius = cell.bar.nominal_length_mm + shell.extension_mm;
+    if (std::abs(shell.radius_mm - radius) > 1e-6)
+      add(-1, "radius",
+          "radius " + std::to_string(shell.radius_mm) +
+              " mm is not bar nominal length + extension = " + std::to_string(radius) + " mm");
+    int points = 0;
+    for (const PlanStep& s : shell.steps) points += s.kind == StepKind::kPoint;
+    if (points == 0) add(-1, "empty", "the shell has no data points");
+
+    auto checkPose = [&](int index, const PlanStep& step) {
+      const std::string problem = planner.poseProblem(c, radius, step.joints_deg, tol);
+      if (!problem.empty()) {
+        add(index, ruleOf(problem), problem);
+        return false;
+      }
+      if (!(ik.configOf(step.joints_deg) == shell.config)) {
+        add(index, "configuration",
+            "arm is " + armConfigName(ik.configOf(step.joints_deg)) + ", the shell's is " +
+                armConfigName(shell.config));
+        return false;
+      }
+      const Eigen::Vector3d n(
+          std::cos(step.lat_deg * kRadPerDeg) * std::cos(step.lon_deg * kRadPerDeg),
+          std::cos(step.lat_deg * kRadPerDeg) * std::sin(step.lon_deg * kRadPerDeg),
+          std::sin(step.lat_deg * kRadPerDeg));
+      const Eigen::Vector3d stated = model.chucks_mm[c.chuck_index] + radius * n;
+      const double off = (planner.inspect(c, radius, step.joints_deg).ball_mm - stated).norm();
+      if (off > kPlaceToleranceMm) {
+        char buf[160];
+        std::snprintf(buf, sizeof buf, "ball is %.2f mm from its stated lat %.2f lon %.2f deg", off,
+                      step.lat_deg, step.lon_deg);
+        add(index, "place", buf);
+        return false;
+      }
+      return true;
+    };
+
+    bool prev_ok = checkPose(-1, shell.connect);
+    const PlanStep* prev = &shell.connect;
+    for (size_t i = 0; i < shell.steps.size(); ++i) {
+      const PlanStep& step = shell.steps[i];
+      const bool ok = checkPose(static_cast<int>(i), step);
+      if (prev_ok && ok) {
+        // Along the move: the first sample that breaks a rule.
+        const std::vector<JointsDeg> samples =
+            planner.segmentSamples(c, prev->joints_deg, step.joints_deg);
+        for (size_t k = 1; k + 1 < samples.size(); ++k) {
+          const std::string problem = planner.poseProblem(c, radius, samples[k], tol);
+          if (problem.empty()) continue;
+          char buf[120];
+          std::snprintf(buf, sizeof buf, "on the move from %s, %.0f%% of the way: ",
+                        i == 0 ? "the connect pose" : ("step " + std::to_string(i - 1)).c_str(),
+                        100.0 * k / (samples.size() - 1));
+          add(static_cast<int>(i), ruleOf(problem), buf + problem);
+          break;
+        }
+      }
+      prev_ok = ok;
+      prev = &step;
+    }
+  }
+  return out;
+}
+
+}  // namespace robocal

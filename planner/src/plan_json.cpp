@@ -1,0 +1,242 @@
+#include <robocal/planner/cell_json.hpp>
+#include <robocal/planner/plan_json.hpp>
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+namespace robocal {
+namespace {
+
+using nlohmann::json;
+using nlohmann::ordered_json;
+
+// Rounds to 1e-9 so that files stay readable; joints keep far more precision than the robot.
+double tidy(double v) {
+  return std::round(v * 1e9) / 1e9 + 0.0;
+}
+
+ordered_json stepToJson(const PlanStep& s) {
+  ordered_json j;
+  j["kind"] = s.kind == StepKind::kPoint ? "point" : "via";
+  ordered_json q = ordered_json::array();
+  for (int k = 0; k < kJointCount; ++k) q.push_back(tidy(s.joints_deg[k]));
+  j["joints_deg"] = q;
+  j["lat_deg"] = tidy(s.lat_deg);
+  j["lon_deg"] = tidy(s.lon_deg);
+  return j;
+}
+
+class Reader {
+ public:
+  explicit Reader(std::string source) : source_(std::move(source)) {}
+  [[noreturn]] void fail(const std::string& key, const std::string& problem) const {
+    throw FormatError(source_ + ": " + key + ": " + problem);
+  }
+  const json& member(const json& obj, const std::string& where, const char* key) const {
+    if (!obj.is_object()) fail(where, std::string("expected an object, got ") + obj.type_name());
+    const auto it = obj.find(key);
+    if (it == obj.end()) fail(where.empty() ? key : where + "." + key, "missing");
+    return *it;
+  }
+  double number(const json& obj, const std::string& where, const char* key) const {
+    const json& v = member(obj, where, key);
+    const std::string path = where.empty() ? key : where + "." + key;
+    if (!v.is_number()) fail(path, std::string("expected a number, got ") + v.type_name());
+    const double d = v.get<double>();
+    if (!std::isfinite(d)) fail(path, "not a finite number");
+    return d;
+  }
+  const json& array(const json& obj, const std::string& where, const char* key) const {
+    const json& v = member(obj, where, key);
+    if (!v.is_array())
+      fail(where.empty() ? key : where + "." + key,
+           std::string("expected an array, got ") + v.type_name());
+    return v;
+  }
+  std::string string(const json& obj, const std::string& where, const char* key) const {
+    const json& v = member(obj, where, key);
+    if (!v.is_string())
+      fail(where.empty() ? key : where + "." + key,
+           std::string("expected a string, got ") + v.type_name());
+    return v.get<std::string>();
+  }
+  PlanStep step(const json& j, const std::string& where) const {
+    PlanStep s;
+    const std::string kind = string(j, where, "kind");
+    if (kind == "point") {
+      s.kind = StepKind::kPoint;
+    } else if (kind == "via") {
+      s.kind = StepKind::kVia;
+    } else {
+      fail(where + ".kind", "expected \"point\" or \"via\", got \"" + kind + "\"");
+    }
+    const json& q = array(j, where, "joints_deg");
+    if (q.size() != kJointCount) fail(where + ".joints_deg", "expected 6 joint readings in deg");
+    for (int k = 0; k < kJointCount; ++k) {
+      if (!q[k].is_number() || !std::isfinite(q[k].get<double>()))
+        fail(where + ".joints_deg[" + std::to_string(k) + "]", "expected a finite number");
+      s.joints_deg[k] = q[k].get<double>();
+    }
+    s.lat_deg = number(j, where, "lat_deg");
+    s.lon_deg = number(j, where, "lon_deg");
+    return s;
+  }
+  const std::string& source() const { return source_; }
+
+ private:
+  std::string source_;
+};
+
+}  // namespace
+
+ordered_json planToJson(const Plan& plan) {
+  ordered_json j;
+  j["format"] = kPlanFormat;
+  j["version"] = kPlanFormatVersion;
+  j["model"] = plan.model_name;
+  const PlanSummary& s = plan.summary;
+  ordered_json summary;
+  summary["shells"] = s.shells;
+  summary["points"] = s.points;
+  summary["vias"] = s.vias;
+  summary["dropped"] = s.dropped;
+  summary["duration_s"] = tidy(s.duration_s);
+  summary["max_deviation_mm"] = tidy(s.max_deviation_mm);
+  if (s.predicted_deflection_mm >= 0)
+    summary["predicted_deflection_mm"] = tidy(s.predicted_deflection_mm);
+  if (s.rank > 0) {
+    summary["rank"] = s.rank;
+    summary["expected_rank"] = s.expected_rank;
+    summary["condition_number"] = tidy(s.condition_number);
+  }
+  j["summary"] = summary;
+  j["settings"] = cellToJson(plan.cell);
+  ordered_json shells = ordered_json::array();
+  for (const ShellPlan& sh : plan.shells) {
+    ordered_json o;
+    o["shell"] = sh.shell;
+    o["connection"] = connectionName(sh.connection);
+    o["ball"] = sh.connection.ball_index + 1;
+    o["chuck"] = sh.connection.chuck_index + 1;
+    o["extension_mm"] = tidy(sh.extension_mm);
+    o["radius_mm"] = tidy(sh.radius_mm);
+    o["arm_configuration"] = armConfigName(sh.config);
+    ordered_json ss;
+    ss["points"] = sh.summary.points;
+    ss["vias"] = sh.summary.vias;
+    ss["duration_s"] = tidy(sh.summary.duration_s);
+    ss["max_deviation_mm"] = tidy(sh.summary.max_deviation_mm);
+    if (sh.summary.predicted_deflection_mm >= 0)
+      ss["predicted_deflection_mm"] = tidy(sh.summary.predicted_deflection_mm);
+    o["summary"] = ss;
+    o["connect"] = stepToJson(sh.connect);
+    o["connect"].erase("kind");
+    ordered_json steps = ordered_json::array();
+    for (const PlanStep& st : sh.steps) steps.push_back(stepToJson(st));
+    o["steps"] = steps;
+    ordered_json dropped = ordered_json::array();
+    for (const DroppedPoint& d : sh.dropped)
+      dropped.push_back(
+          {{"lat_deg", tidy(d.lat_deg)}, {"lon_deg", tidy(d.lon_deg)}, {"reason", d.reason}});
+    o["dropped"] = dropped;
+    shells.push_back(o);
+  }
+  j["shells"] = shells;
+  return j;
+}
+
+std::string formatPlan(const Plan& plan) {
+  return planToJson(plan).dump(1) + "\n";
+}
+
+Plan planFromJson(const json& root, const std::string& source) {
+  const Reader r(source);
+  if (!root.is_object()) r.fail("top level", "expected an object");
+  if (r.string(root, "", "format") != kPlanFormat)
+    r.fail("format", std::string("expected \"") + kPlanFormat + "\"");
+  const json& version = r.member(root, "", "version");
+  if (!version.is_number_integer() || version.get<int>() != kPlanFormatVersion)
+    r.fail("version", "expected " + std::to_string(kPlanFormatVersion) + ", got " + version.dump());
+  Plan plan;
+  if (root.contains("model") && root["model"].is_string()) plan.model_name = root["model"];
+  plan.cell = cellFromJson(r.member(root, "", "settings"), source + ": settings");
+  const json& shells = r.array(root, "", "shells");
+  for (size_t i = 0; i < shells.size(); ++i) {
+    const std::string where = "shells[" + std::to_string(i) + "]";
+    const json& o = shells[i];
+    ShellPlan sh;
+    const double number = r.number(o, where, "shell");
+    if (number != std::floor(number) || number < 1) r.fail(where + ".shell", "expected 1, 2, ...");
+    sh.shell = static_cast<int>(number);
+    try {
+      const auto c = parseConnections(r.string(o, where, "connection"));
+      if (c.size() != 1) r.fail(where + ".connection", "expected one connection like B1C2");
+      sh.connection = c[0];
+    } catch (const std::invalid_argument& e) {
+      r.fail(where + ".connection", e.what());
+    }
+    sh.extension_mm = r.number(o, where, "extension_mm");
+    sh.radius_mm = r.number(o, where, "radius_mm");
+    const std::string config = r.string(o, where, "arm_configuration");
+    const auto parsed = parseArmConfig(config);
+    if (!parsed) r.fail(where + ".arm_configuration", "unknown configuration \"" + config + "\"");
+    sh.config = *parsed;
+    const json& connect = r.member(o, where, "connect");
+    json connect_step = connect;
+    if (connect_step.is_object()) connect_step["kind"] = "point";
+    sh.connect = r.step(connect_step, where + ".connect");
+    const json& steps = r.array(o, where, "steps");
+    for (size_t k = 0; k < steps.size(); ++k)
+      sh.steps.push_back(r.step(steps[k], where + ".steps[" + std::to_string(k) + "]"));
+    if (o.contains("dropped") && o["dropped"].is_array())
+      for (size_t k = 0; k < o["dropped"].size(); ++k) {
+        const std::string dw = where + ".dropped[" + std::to_string(k) + "]";
+        const json& d = o["dropped"][k];
+        sh.dropped.push_back({r.number(d, dw, "lat_deg"), r.number(d, dw, "lon_deg"),
+                              d.contains("reason") && d["reason"].is_string()
+                                  ? d["reason"].get<std::string>()
+                                  : std::string()});
+      }
+    if (o.contains("summary") && o["summary"].is_object()) {
+      const json& ss = o["summary"];
+      sh.summary.points = ss.value("points", 0);
+      sh.summary.vias = ss.value("vias", 0);
+      sh.summary.duration_s = ss.value("duration_s", 0.0);
+      sh.summary.max_deviation_mm = ss.value("max_deviation_mm", 0.0);
+      sh.summary.predicted_deflection_mm = ss.value("predicted_deflection_mm", -1.0);
+    }
+    plan.shells.push_back(std::move(sh));
+  }
+  summarizePlan(plan);
+  if (root.contains("summary") && root["summary"].is_object()) {
+    const json& s = root["summary"];
+    plan.summary.rank = s.value("rank", 0);
+    plan.summary.expected_rank = s.value("expected_rank", 36);
+    plan.summary.condition_number = s.value("condition_number", 0.0);
+  }
+  return plan;
+}
+
+Plan parsePlan(const std::string& text, const std::string& source) {
+  json j;
+  try {
+    j = json::parse(text);
+  } catch (const json::parse_error& e) {
+    throw FormatError(source + ": not valid JSON: " + e.what());
+  }
+  try {
+    return planFromJson(j, source);
+  } catch (const json::exception& e) {
+    throw FormatError(source + ": " + e.what());
+  }
+}
+
+Plan loadPlanFile(const std::string& path) {
+  return parsePlan(readTextFile(path), path);
+}
+
+void savePlanFile(const std::string& path, const Plan& plan) {
+  writeTextFileAtomic(path, formatPlan(plan));
+}
+
+}  // namespace robocal

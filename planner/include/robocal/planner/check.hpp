@@ -1,0 +1,35 @@
+// Re-verification of any plan (hand-edited ones too) against the safety rules of a model and a
+// cell: what `robocal check-plan` prints and what the daemon runs before it moves anything.
+// No I/O.
+#pragma once
+
+#include <robocal/planner/plan.hpp>
+
+#include <string>
+#include <vector>
+
+namespace robocal {
+
+struct PlanViolation {
+  int shell = 0;     // the shell's number as written in the plan (0 for the plan as a whole)
+  int step = -1;     // 0-based index into the shell's steps; -1 for the connect pose or the shell
+  std::string rule;  // short name: "limits", "deviation", "configuration", ...
+  std::string message;  // what is wrong, with numbers
+};
+
+// Every rule the planner keeps, checked from the joints alone with `model`:
+//   - each shell's connection, extension (one of the cell's) and radius (bar + extension);
+//   - at the connect pose and every step: joints inside the limits minus the margin, the
+//     singularity margins, the bar-tool angle, the table clearance, the shell's arm
+//     configuration, |radial deviation| <= via_tolerance_mm, and the ball at the step's stated
+//     latitude and longitude (within 1 mm);
+//   - along every joint-interpolated segment (connect -> step 0 -> step 1 ...), sampled at
+//     motion.sample_step_mm or finer: the same pose rules.
+// One violation per broken rule per step (the first sample of a segment that breaks it).
+// Throws PlanError when the model or the cell cannot be used at all.
+std::vector<PlanViolation> checkPlan(const Model& model, const CellConfig& cell, const Plan& plan);
+
+// "shell 3 step 17 (deviation): ..." / "shell 3 connect pose (limits): ...".
+std::string describeViolation(const PlanViolation& v);
+
+}  // namespace robocal
