@@ -78,8 +78,9 @@ int run(const std::vector<std::string>& argv) {
           armConfigName(s.config).c_str(), s.summary.points, s.summary.vias, s.dropped.size(),
           s.summary.duration_s / 60.0, s.summary.max_deviation_mm);
       if (s.summary.predicted_deflection_mm >= 0)
-        std::printf("  deflection <= %.2f mm%s", s.summary.predicted_deflection_mm,
-                    s.summary.predicted_deflection_mm > cell.bar.max_deflection_mm
+        std::printf("  deflection <= %.2f mm (change from connect <= %.2f mm)%s",
+                    s.summary.predicted_deflection_mm, s.summary.predicted_change_mm,
+                    s.summary.predicted_change_mm > cell.bar.max_deflection_mm
                         ? "  BEYOND THE BAR'S RANGE"
                         : "");
       std::printf("\n");
@@ -108,16 +109,18 @@ int run(const std::vector<std::string>& argv) {
     std::printf(
         "forecast: with model errors of %.2f mm / %.3f deg (links), %.3f deg (joint "
         "offsets), %.4f (gains) over %d simulated robots, the bar deflects up to %.2f mm "
-        "(range +/-%.2f mm)\n",
+        "from its nominal length and changes by up to %.2f mm from its reading at the "
+        "connect pose (range +/-%.2f mm)\n",
         u.translation_sigma_mm, u.link_angle_sigma_deg, u.joint_offset_sigma_deg, u.gain_sigma,
-        u.models, sum.predicted_deflection_mm, cell.bar.max_deflection_mm);
+        u.models, sum.predicted_deflection_mm, sum.predicted_change_mm, cell.bar.max_deflection_mm);
   if (id.rank < id.expected_rank)
     std::printf("warning: the plan identifies only %d of the %d independent parameters\n", id.rank,
                 id.expected_rank);
-  if (sum.predicted_deflection_mm > cell.bar.max_deflection_mm)
+  if (sum.predicted_change_mm > cell.bar.max_deflection_mm)
     std::printf(
-        "warning: the forecast deflection exceeds the bar's range: refine the model "
-        "while running (the daemon re-plans) or reduce via_tolerance_mm\n");
+        "warning: with that model error the bar can leave its range: run it with the "
+        "model refined as data arrive (the daemon re-plans the rest of each shell), or "
+        "calibrate roughly first\n");
   std::printf("planned in %.2f s; wrote %s\n", plan_s, out.c_str());
   return 0;
 }

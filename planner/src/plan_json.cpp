@@ -102,8 +102,10 @@ ordered_json planToJson(const Plan& plan) {
   summary["dropped"] = s.dropped;
   summary["duration_s"] = tidy(s.duration_s);
   summary["max_deviation_mm"] = tidy(s.max_deviation_mm);
-  if (s.predicted_deflection_mm >= 0)
+  if (s.predicted_deflection_mm >= 0) {
     summary["predicted_deflection_mm"] = tidy(s.predicted_deflection_mm);
+    summary["predicted_change_from_connect_mm"] = tidy(s.predicted_change_mm);
+  }
   if (s.rank > 0) {
     summary["rank"] = s.rank;
     summary["expected_rank"] = s.expected_rank;
@@ -126,8 +128,10 @@ ordered_json planToJson(const Plan& plan) {
     ss["vias"] = sh.summary.vias;
     ss["duration_s"] = tidy(sh.summary.duration_s);
     ss["max_deviation_mm"] = tidy(sh.summary.max_deviation_mm);
-    if (sh.summary.predicted_deflection_mm >= 0)
+    if (sh.summary.predicted_deflection_mm >= 0) {
       ss["predicted_deflection_mm"] = tidy(sh.summary.predicted_deflection_mm);
+      ss["predicted_change_from_connect_mm"] = tidy(sh.summary.predicted_change_mm);
+    }
     o["summary"] = ss;
     o["connect"] = stepToJson(sh.connect);
     o["connect"].erase("kind");
@@ -146,7 +150,25 @@ ordered_json planToJson(const Plan& plan) {
 }
 
 std::string formatPlan(const Plan& plan) {
-  return planToJson(plan).dump(1) + "\n";
+  // Pretty JSON, but one line per step so that a plan of thousands of steps stays readable.
+  ordered_json j = planToJson(plan);
+  std::vector<std::string> step_blocks;
+  for (auto& shell : j["shells"]) {
+    std::string block = "[";
+    const auto& steps = shell["steps"];
+    for (size_t i = 0; i < steps.size(); ++i)
+      block += std::string(i == 0 ? "\n" : ",\n") + "    " + steps[i].dump();
+    block += steps.empty() ? "]" : "\n   ]";
+    shell["steps"] = "@@steps" + std::to_string(step_blocks.size()) + "@@";
+    step_blocks.push_back(std::move(block));
+  }
+  std::string text = j.dump(1);
+  for (size_t i = 0; i < step_blocks.size(); ++i) {
+    const std::string key = "\"@@steps" + std::to_string(i) + "@@\"";
+    const size_t at = text.find(key);
+    if (at != std::string::npos) text.replace(at, key.size(), step_blocks[i]);
+  }
+  return text + "\n";
 }
 
 Plan planFromJson(const json& root, const std::string& source) {
@@ -204,6 +226,7 @@ Plan planFromJson(const json& root, const std::string& source) {
       sh.summary.duration_s = ss.value("duration_s", 0.0);
       sh.summary.max_deviation_mm = ss.value("max_deviation_mm", 0.0);
       sh.summary.predicted_deflection_mm = ss.value("predicted_deflection_mm", -1.0);
+      sh.summary.predicted_change_mm = ss.value("predicted_change_from_connect_mm", -1.0);
     }
     plan.shells.push_back(std::move(sh));
   }

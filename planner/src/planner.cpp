@@ -5,9 +5,13 @@
 #include <robocal/solver/problem.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <exception>
+#include <mutex>
 #include <numbers>
+#include <thread>
 
 namespace robocal {
 namespace {
@@ -648,6 +652,7 @@ void summarizePlan(Plan& plan) {
   s.points = s.vias = s.dropped = 0;
   s.duration_s = s.max_deviation_mm = 0;
   s.predicted_deflection_mm = -1;
+  s.predicted_change_mm = -1;
   for (const ShellPlan& shell : plan.shells) {
     s.points += shell.summary.points;
     s.vias += shell.summary.vias;
@@ -656,6 +661,7 @@ void summarizePlan(Plan& plan) {
     s.max_deviation_mm = std::max(s.max_deviation_mm, shell.summary.max_deviation_mm);
     s.predicted_deflection_mm =
         std::max(s.predicted_deflection_mm, shell.summary.predicted_deflection_mm);
+    s.predicted_change_mm = std::max(s.predicted_change_mm, shell.summary.predicted_change_mm);
   }
 }
 
@@ -664,10 +670,35 @@ Plan planCell(const Model& model, const CellConfig& cell) {
   Plan plan;
   plan.model_name = model.name;
   plan.cell = cell;
-  int number = 1;
+  struct Job {
+    Connection connection;
+    double extension_mm;
+  };
+  std::vector<Job> jobs;
   for (double extension : cell.bar.extension_lengths_mm)
-    for (const Connection& c : cell.connections)
-      plan.shells.push_back(planner.planShell(c, extension, number++));
+    for (const Connection& c : cell.connections) jobs.push_back({c, extension});
+  // Shells are independent: plan them on a few threads.
+  plan.shells.resize(jobs.size());
+  std::atomic<size_t> next{0};
+  std::exception_ptr failure;
+  std::mutex failure_mutex;
+  auto worker = [&] {
+    for (size_t i = next++; i < jobs.size(); i = next++) {
+      try {
+        plan.shells[i] =
+            planner.planShell(jobs[i].connection, jobs[i].extension_mm, static_cast<int>(i) + 1);
+      } catch (...) {
+        const std::lock_guard<std::mutex> lock(failure_mutex);
+        if (!failure) failure = std::current_exception();
+      }
+    }
+  };
+  const unsigned threads = std::clamp(std::thread::hardware_concurrency(), 1u, 4u);
+  std::vector<std::thread> pool;
+  for (unsigned t = 1; t < threads && t < jobs.size(); ++t) pool.emplace_back(worker);
+  worker();
+  for (std::thread& t : pool) t.join();
+  if (failure) std::rethrow_exception(failure);
   for (const ShellPlan& shell : plan.shells)
     if (shell.summary.points == 0) {
       std::string msg =
@@ -725,19 +756,24 @@ PlanIdentifiability planIdentifiability(const Model& model, const Plan& plan, do
 void predictDeflections(const Model& nominal, const std::vector<Model>& truths, Plan& plan) {
   (void)nominal;
   for (ShellPlan& shell : plan.shells) {
-    double worst = 0;
+    double worst = 0, change = 0;
     for (const Model& truth : truths) {
       const Kinematics kin(truth);
       const Eigen::Vector3d ball = truth.balls_mm[shell.connection.ball_index];
       const Eigen::Vector3d chuck = truth.chucks_mm[shell.connection.chuck_index];
-      worst = std::max(
-          worst, std::abs(kin.barLength(shell.connect.joints_deg, ball, chuck) - shell.radius_mm));
-      for (const PlanStep& step : shell.steps)
-        worst = std::max(worst,
-                         std::abs(kin.barLength(step.joints_deg, ball, chuck) - shell.radius_mm));
+      const double at_connect =
+          kin.barLength(shell.connect.joints_deg, ball, chuck) - shell.radius_mm;
+      worst = std::max(worst, std::abs(at_connect));
+      for (const PlanStep& step : shell.steps) {
+        const double e = kin.barLength(step.joints_deg, ball, chuck) - shell.radius_mm;
+        worst = std::max(worst, std::abs(e));
+        change = std::max(change, std::abs(e - at_connect));
+      }
     }
     shell.summary.predicted_deflection_mm =
         truths.empty() ? -1 : worst + shell.summary.max_deviation_mm;
+    shell.summary.predicted_change_mm =
+        truths.empty() ? -1 : change + shell.summary.max_deviation_mm;
   }
   summarizePlan(plan);
 }

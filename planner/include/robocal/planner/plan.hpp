@@ -38,6 +38,9 @@ struct ShellSummary {
   double duration_s = 0;                // moves at the configured speed plus dwells
   double max_deviation_mm = 0;          // nominal radial deviation, worst over all segments
   double predicted_deflection_mm = -1;  // worst |deflection| with model error; < 0: not computed
+  // Worst change of the deflection from its value at the connect pose: what the bar must absorb
+  // when the shell's radius is set to the bar's length measured at the connect pose.
+  double predicted_change_mm = -1;
 };
 
 struct ShellPlan {
@@ -57,6 +60,7 @@ struct PlanSummary {
   double duration_s = 0;
   double max_deviation_mm = 0;
   double predicted_deflection_mm = -1;  // worst over shells; < 0: not computed
+  double predicted_change_mm = -1;      // worst over shells; < 0: not computed
   int rank = 0, expected_rank = 36;     // identification Jacobian of all the plan's points
   double condition_number = 0;          // of the column-scaled Jacobian on its identified part
 };
@@ -151,9 +155,11 @@ struct PlanIdentifiability {
 PlanIdentifiability planIdentifiability(const Model& model, const Plan& plan,
                                         double extension_mm = -1);
 
-// Worst |bar deflection| per shell for the given true robots: at every step, the true distance
-// minus the radius, plus the segment's nominal deviation either side (an upper bound along the
-// moves). Sets summary.predicted_deflection_mm of every shell and of the plan.
+// Worst |bar deflection| per shell for the given true robots: the largest |true distance minus
+// the radius| over the connect pose and every step, plus the shell's worst nominal deviation
+// along the moves (a bound, since the model error changes little over one move). Sets
+// summary.predicted_deflection_mm and predicted_change_mm (the same, relative to the deflection
+// at the connect pose) of every shell and of the plan.
 void predictDeflections(const Model& nominal, const std::vector<Model>& truths, Plan& plan);
 
 // Fills the plan summary's totals from its shells (not rank or deflection).
