@@ -1,0 +1,375 @@
+#include <catch2/catch.hpp>
+
+#include <robocal/formats/model_json.hpp>
+#include <robocal/kinematics/puma560.hpp>
+#include <robocal/planner/cell_json.hpp>
+#include <robocal/planner/check.hpp>
+#include <robocal/planner/plan.hpp>
+#include <robocal/planner/plan_json.hpp>
+#include <robocal/sim/measurements.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <sstream>
+#include <string>
+
+using namespace robocal;
+
+namespace {
+
+const std::string kSource = ROBOCAL_SOURCE_DIR;
+
+const Model& nominal() {
+  static const Model m = loadModelFile(kSource + "/config/puma560.json");
+  return m;
+}
+
+const CellConfig& defaultCell() {
+  static const CellConfig c = loadCellFile(kSource + "/config/cell.json");
+  return c;
+}
+
+// The default cell's plan, made once for all the tests that read it.
+const Plan& defaultPlan() {
+  static const Plan p = planCell(nominal(), defaultCell());
+  return p;
+}
+
+// Largest |ball-chuck distance - radius| along the joint-interpolated move a -> b, sampled
+// independently of the planner: at least every 0.25 mm of ball travel.
+double worstDeviation(const Kinematics& kin, const Model& m, const ShellPlan& shell,
+                      const JointsDeg& a, const JointsDeg& b) {
+  const Eigen::Vector3d ball = m.balls_mm[shell.connection.ball_index];
+  const Eigen::Vector3d chuck = m.chucks_mm[shell.connection.chuck_index];
+  int n = 16;
+  for (;;) {
+    double worst = 0, gap = 0;
+    Eigen::Vector3d prev = kin.ballPosition(a, ball);
+    for (int i = 0; i <= n; ++i) {
+      const JointsDeg q = a + (b - a) * (double(i) / n);
+      const Eigen::Vector3d p = kin.ballPosition(q, ball);
+      gap = std::max(gap, (p - prev).norm());
+      prev = p;
+      worst = std::max(worst, std::abs((p - chuck).norm() - shell.radius_mm));
+    }
+    if (gap <= 0.25) return worst;
+    n *= 2;
+  }
+}
+
+std::string robocalBinary() {
+  if (const char* dir = std::getenv("ROBOCAL_BIN")) return std::string(dir) + "/robocal";
+  return std::string(ROBOCAL_BINARY_DIR) + "/cli/robocal";
+}
+
+std::string tempPath(const std::string& name) {
+  return std::string(ROBOCAL_BINARY_DIR) + "/test_planner_" + name;
+}
+
+int runCommand(const std::string& command, std::string& output) {
+  const std::string out_path = tempPath("cmd_output.txt");
+  const int status = std::system((command + " > " + out_path + " 2>&1").c_str());
+  std::ifstream in(out_path);
+  std::stringstream text;
+  text << in.rdbuf();
+  output = text.str();
+  return status;
+}
+
+}  // namespace
+
+TEST_CASE("the default cell plans nine shells per extension, each with at least 80 points") {
+  const Plan& plan = defaultPlan();
+  REQUIRE(plan.shells.size() == 18);
+  for (const ShellPlan& s : plan.shells) {
+    INFO("shell " << s.shell << " " << connectionName(s.connection));
+    CHECK(s.summary.points >= 80);
+    CHECK(s.radius_mm == Approx(100.0 + s.extension_mm));
+    CHECK(s.summary.max_deviation_mm <= defaultCell().motion.via_tolerance_mm);
+    CHECK(s.summary.duration_s > s.summary.points * defaultCell().motion.settle_s);
+    // Every grid point is either planned or listed as dropped, with a reason.
+    CHECK(s.summary.points + static_cast<int>(s.dropped.size()) == 8 * 12);
+    for (const DroppedPoint& d : s.dropped) CHECK_FALSE(d.reason.empty());
+  }
+  int first_set = 0, second_set = 0;
+  for (const ShellPlan& s : plan.shells) (s.extension_mm == 0 ? first_set : second_set)++;
+  CHECK(first_set == 9);
+  CHECK(second_set == 9);
+}
+
+TEST_CASE("the default plan identifies all 36 independent parameters") {
+  const PlanIdentifiability all = planIdentifiability(nominal(), defaultPlan());
+  CHECK(all.rank == 36);
+  CHECK(all.condition_number > 1);
+  CHECK(all.condition_number < 1e4);
+  for (double e : {0.0, 150.0}) {
+    INFO("extension " << e);
+    CHECK(planIdentifiability(nominal(), defaultPlan(), e).rank == 36);
+  }
+}
+
+TEST_CASE("every move of the plan keeps the nominal radial deviation within via_tolerance") {
+  const Kinematics kin(nominal());
+  const double tol = defaultCell().motion.via_tolerance_mm;
+  double worst = 0;
+  long segments = 0;
+  for (const ShellPlan& s : defaultPlan().shells) {
+    JointsDeg prev = s.connect.joints_deg;
+    for (size_t i = 0; i < s.steps.size(); ++i) {
+      const double d = worstDeviation(kin, nominal(), s, prev, s.steps[i].joints_deg);
+      if (d > tol) FAIL("shell " << s.shell << " step " << i << ": deviation " << d << " mm");
+      worst = std::max(worst, d);
+      prev = s.steps[i].joints_deg;
+      ++segments;
+    }
+  }
+  CHECK(segments > 1000);
+  CHECK(worst <= tol);
+  CHECK(worst > 0.1 * tol);  // the vias are not wastefully dense either
+}
+
+TEST_CASE(
+    "every pose of the plan is inside the limits minus the margin, away from "
+    "singularities, in its shell's configuration") {
+  const CellConfig& cell = defaultCell();
+  const PumaIk ik(nominal());
+  for (const ShellPlan& s : defaultPlan().shells) {
+    std::vector<const PlanStep*> poses = {&s.connect};
+    for (const PlanStep& st : s.steps) poses.push_back(&st);
+    for (size_t i = 0; i < poses.size(); ++i) {
+      const JointsDeg& q = poses[i]->joints_deg;
+      INFO("shell " << s.shell << " pose " << i);
+      CHECK(withinLimits(nominal(), q, cell.margins.joint_limit_deg));
+      const SingularityMargins m = ik.singularityMargins(q);
+      CHECK(m.wrist_deg >= cell.margins.wrist_singularity_deg);
+      CHECK(m.elbow_deg >= cell.margins.elbow_singularity_deg);
+      CHECK(m.shoulder_mm >= cell.margins.shoulder_singularity_mm);
+      CHECK(ik.configOf(q) == s.config);
+    }
+  }
+}
+
+TEST_CASE("check-plan accepts the plan, also after a round trip through the file format") {
+  const Plan& plan = defaultPlan();
+  CHECK(checkPlan(nominal(), defaultCell(), plan).empty());
+  const Plan back = parsePlan(formatPlan(plan), "round trip");
+  REQUIRE(back.shells.size() == plan.shells.size());
+  for (size_t i = 0; i < plan.shells.size(); ++i) {
+    REQUIRE(back.shells[i].steps.size() == plan.shells[i].steps.size());
+    CHECK(back.shells[i].connection == plan.shells[i].connection);
+    CHECK(back.shells[i].config == plan.shells[i].config);
+    CHECK(back.shells[i].dropped.size() == plan.shells[i].dropped.size());
+  }
+  CHECK(back.summary.points == plan.summary.points);
+  const auto violations = checkPlan(nominal(), defaultCell(), back);
+  for (const auto& v : violations) UNSCOPED_INFO(describeViolation(v));
+  CHECK(violations.empty());
+}
+
+TEST_CASE("check-plan catches a hand-corrupted plan and names the step") {
+  Plan plan = defaultPlan();
+  ShellPlan& shell = plan.shells[2];
+  SECTION("a joint nudged by 2 degrees") {
+    size_t index = 10;
+    shell.steps[index].joints_deg[1] += 2.0;
+    const auto v = checkPlan(nominal(), defaultCell(), plan);
+    REQUIRE_FALSE(v.empty());
+    CHECK(v[0].shell == shell.shell);
+    CHECK(v[0].step == static_cast<int>(index));
+  }
+  SECTION("a via removed: the move leaves the tolerance") {
+    size_t via = 0;
+    while (shell.steps[via].kind != StepKind::kVia) ++via;
+    shell.steps.erase(shell.steps.begin() + static_cast<long>(via));
+    const auto v = checkPlan(nominal(), defaultCell(), plan);
+    REQUIRE(v.size() == 1);
+    CHECK(v[0].rule == "deviation");
+    CHECK(v[0].step == static_cast<int>(via));  // the move that now ends at the old next step
+  }
+  SECTION("a joint past its limit") {
+    shell.steps[5].joints_deg[4] = 99.0;  // J5 limit is 100, margin 5
+    const auto v = checkPlan(nominal(), defaultCell(), plan);
+    REQUIRE_FALSE(v.empty());
+    bool found = false;
+    for (const auto& x : v) found |= x.step == 5 && x.rule == "limits";
+    CHECK(found);
+  }
+  SECTION("a configuration flipped") {
+    shell.config.wrist_flip = !shell.config.wrist_flip;
+    const auto v = checkPlan(nominal(), defaultCell(), plan);
+    CHECK(v.size() == shell.steps.size() + 1);  // every pose of that shell
+    CHECK(v[0].rule == "configuration");
+  }
+  SECTION("a wrong extension") {
+    shell.extension_mm = 50;
+    const auto v = checkPlan(nominal(), defaultCell(), plan);
+    REQUIRE_FALSE(v.empty());
+    CHECK(v[0].rule == "extension");
+  }
+}
+
+TEST_CASE("robocal check-plan prints each violation with its step and exits non-zero") {
+  nlohmann::json j = nlohmann::json::parse(formatPlan(defaultPlan()));
+  const std::string good = tempPath("good_plan.json");
+  const std::string bad = tempPath("bad_plan.json");
+  std::ofstream(good) << j.dump();
+  j["shells"][4]["steps"][7]["joints_deg"][2] =
+      j["shells"][4]["steps"][7]["joints_deg"][2].get<double>() + 3.0;
+  std::ofstream(bad) << j.dump();
+  const std::string base = robocalBinary() + " check-plan --model " + kSource +
+                           "/config/puma560.json --cell " + kSource + "/config/cell.json ";
+  std::string out;
+  CHECK(runCommand(base + good, out) == 0);
+  CHECK(out.find("OK") != std::string::npos);
+  CHECK(runCommand(base + bad, out) != 0);
+  INFO(out);
+  CHECK(out.find("shell 5 step 7") != std::string::npos);
+}
+
+TEST_CASE("singularity margins reject poses near a singularity") {
+  const ShellPlanner planner(nominal(), defaultCell());
+  const Connection c{0, 0};
+  // A planned pose, then the same with joint 5 turned close to zero.
+  const PlanStep& step = defaultPlan().shells[0].steps[0];
+  CHECK(planner.poseProblem(c, 100, step.joints_deg, 0.5).empty());
+  JointsDeg q = step.joints_deg;
+  q[4] = 3.0;
+  const std::string problem = planner.poseProblem(c, 100, q, 1e9);
+  CHECK(problem.find("wrist") != std::string::npos);
+
+  // A shoulder margin no pose can keep (the arm reaches less than 2 m): every point of the
+  // shell is dropped with that reason, and planning the cell fails with a clear error.
+  CellConfig cell = defaultCell();
+  cell.connections = {Connection{0, 0}};
+  cell.bar.extension_lengths_mm = {0};
+  cell.margins.shoulder_singularity_mm = 2000;
+  const ShellPlan shell = ShellPlanner(nominal(), cell).planShell(c, 0, 1);
+  CHECK(shell.summary.points == 0);
+  REQUIRE(shell.dropped.size() == 96);
+  for (const DroppedPoint& d : shell.dropped)
+    CHECK(d.reason.find("shoulder singularity") != std::string::npos);
+  CHECK_THROWS_AS(planCell(nominal(), cell), PlanError);
+  cell.margins.shoulder_singularity_mm = defaultCell().margins.shoulder_singularity_mm;
+
+  // A moderate margin: fewer points, but every planned pose keeps it.
+  cell.margins.wrist_singularity_deg = 30;
+  const Plan p = planCell(nominal(), cell);
+  const PumaIk ik(nominal());
+  for (const PlanStep& s : p.shells[0].steps)
+    CHECK(ik.singularityMargins(s.joints_deg).wrist_deg >= 30);
+}
+
+TEST_CASE(
+    "unreachable grids: out-of-reach shells are refused, partly reachable ones list the "
+    "dropped points") {
+  CellConfig cell = defaultCell();
+  cell.connections = {Connection{1, 2}};
+  SECTION("a radius far beyond the arm's reach") {
+    cell.bar.extension_lengths_mm = {3000};
+    try {
+      planCell(nominal(), cell);
+      FAIL("planned an unreachable shell");
+    } catch (const PlanError& e) {
+      CHECK(std::string(e.what()).find("no grid point") != std::string::npos);
+    }
+  }
+  SECTION("a large shell: some points out of reach") {
+    cell.bar.extension_lengths_mm = {400};
+    const Plan p = planCell(nominal(), cell);
+    const ShellPlan& s = p.shells[0];
+    CHECK(s.summary.points > 0);
+    CHECK_FALSE(s.dropped.empty());
+    CHECK(s.summary.points + static_cast<int>(s.dropped.size()) == 96);
+    CHECK(checkPlan(nominal(), cell, p).empty());
+  }
+  SECTION("bad settings name the key") {
+    cell.motion.via_tolerance_mm = 3.0;  // more than the bar's range
+    try {
+      ShellPlanner planner(nominal(), cell);
+      FAIL("accepted a tolerance beyond the bar's range");
+    } catch (const PlanError& e) {
+      CHECK(std::string(e.what()).find("motion.via_tolerance_mm") != std::string::npos);
+    }
+  }
+}
+
+TEST_CASE("a fixed arm configuration is kept on every shell") {
+  CellConfig cell = defaultCell();
+  cell.arm_configuration = "right-up-noflip";
+  cell.bar.extension_lengths_mm = {0};
+  cell.connections = {Connection{0, 0}, Connection{2, 2}};
+  const Plan p = planCell(nominal(), cell);
+  const PumaIk ik(nominal());
+  for (const ShellPlan& s : p.shells) {
+    CHECK(armConfigName(s.config) == "right-up-noflip");
+    for (const PlanStep& st : s.steps)
+      CHECK(armConfigName(ik.configOf(st.joints_deg)) == "right-up-noflip");
+  }
+  CHECK(checkPlan(nominal(), cell, p).empty());
+}
+
+TEST_CASE("re-planning the rest of a shell with a refined model keeps it safe for that model") {
+  std::mt19937_64 rng(3);
+  const Model truth = perturbModel(nominal(), PerturbationSigmas{}, rng);
+  const ShellPlan& old = defaultPlan().shells[4];
+  const ShellPlanner planner(truth, defaultCell());
+  const size_t next = old.steps.size() / 2;
+  const JointsDeg here = old.steps[next - 1].joints_deg;
+  const ShellPlan fresh = planner.replanRemaining(old, next, here);
+  // The kept part is unchanged; the rest has (about) the same points.
+  for (size_t i = 0; i < next; ++i) CHECK(fresh.steps[i].joints_deg == old.steps[i].joints_deg);
+  int old_points = 0, new_points = 0;
+  for (size_t i = next; i < old.steps.size(); ++i)
+    old_points += old.steps[i].kind == StepKind::kPoint;
+  for (size_t i = next; i < fresh.steps.size(); ++i)
+    new_points += fresh.steps[i].kind == StepKind::kPoint;
+  CHECK(new_points + static_cast<int>(fresh.dropped.size() - old.dropped.size()) == old_points);
+  CHECK(new_points >= old_points - 2);
+
+  // The new steps keep every rule for the refined model. (The robot's current pose was planned
+  // for the old model, so the check starts at the first re-planned step.)
+  Plan rest;
+  rest.cell = defaultCell();
+  ShellPlan part = fresh;
+  part.connect = fresh.steps[next];
+  part.steps.assign(fresh.steps.begin() + static_cast<long>(next) + 1, fresh.steps.end());
+  rest.shells.push_back(part);
+  const auto v = checkPlan(truth, defaultCell(), rest);
+  for (const auto& x : v) UNSCOPED_INFO(describeViolation(x));
+  CHECK(v.empty());
+  // And the points are on the refined model's shell.
+  const Kinematics kin(truth);
+  for (const PlanStep& s : part.steps)
+    if (s.kind == StepKind::kPoint)
+      CHECK(std::abs(kin.barLength(s.joints_deg, truth.balls_mm[old.connection.ball_index],
+                                   truth.chucks_mm[old.connection.chuck_index]) -
+                     old.radius_mm) < 1e-6);
+}
+
+TEST_CASE("the deflection forecast grows with the model uncertainty") {
+  Plan plan = defaultPlan();
+  std::mt19937_64 rng(5);
+  PerturbationSigmas small;
+  small.translation_mm = 0.02;
+  small.link_angle_deg = 0.002;
+  small.joint_offset_deg = 0.005;
+  small.gain = 0.00005;
+  std::vector<Model> few, many;
+  for (int i = 0; i < 5; ++i) few.push_back(perturbModel(nominal(), small, rng));
+  for (int i = 0; i < 5; ++i) many.push_back(perturbModel(nominal(), PerturbationSigmas{}, rng));
+  predictDeflections(nominal(), {}, plan);
+  CHECK(plan.summary.predicted_deflection_mm < 0);
+  predictDeflections(nominal(), {nominal()}, plan);  // a perfect model: only the vias' deviation
+  CHECK(plan.summary.predicted_deflection_mm == Approx(plan.summary.max_deviation_mm));
+  predictDeflections(nominal(), few, plan);
+  const double low = plan.summary.predicted_deflection_mm;
+  predictDeflections(nominal(), many, plan);
+  const double high = plan.summary.predicted_deflection_mm;
+  CHECK(low > plan.summary.max_deviation_mm);
+  CHECK(high > low);
+  for (const ShellPlan& s : plan.shells) CHECK(s.summary.predicted_deflection_mm > 0);
+}
