@@ -91,6 +91,9 @@ struct ShellPlanner::Node {
   Eigen::Quaterniond rotation;
   JointsDeg q;
   double lat_deg, lon_deg;
+  // Extra deviation allowed on moves that start here: a robot pose planned with another model
+  // is off this model's shell by that much (re-planning).
+  double slack_mm = 0;
 };
 
 ShellPlanner::ShellPlanner(const Model& model, const CellConfig& cell)
@@ -176,6 +179,12 @@ PoseReport ShellPlanner::inspect(const Connection& c, double radius, const Joint
 
 std::string ShellPlanner::poseProblem(const Connection& c, double radius, const JointsDeg& q,
                                       double tolerance_mm) const {
+  PoseReport r;
+  return poseProblem(c, radius, q, tolerance_mm, r);
+}
+
+std::string ShellPlanner::poseProblem(const Connection& c, double radius, const JointsDeg& q,
+                                      double tolerance_mm, PoseReport& r) const {
   if (!q.allFinite()) return "joints are not finite numbers";
   const SafetyMargins& m = cell_.margins;
   for (int j = 0; j < kJointCount; ++j) {
@@ -184,7 +193,7 @@ std::string ShellPlanner::poseProblem(const Connection& c, double radius, const 
       return fmt("joint %.0f at %.2f deg is not %.1f deg inside its limits", j + 1.0, q[j],
                  m.joint_limit_deg);
   }
-  const PoseReport r = inspect(c, radius, q);
+  r = inspect(c, radius, q);
   if (r.singularity.wrist_deg < m.wrist_singularity_deg)
     return fmt("wrist %.2f deg from singular (margin %.1f deg)", r.singularity.wrist_deg,
                m.wrist_singularity_deg);
@@ -250,13 +259,14 @@ bool ShellPlanner::segmentOk(const Connection& c, double radius, const JointsDeg
       return false;
     }
   }
+  PoseReport r;
   for (const JointsDeg& q : segmentSamples(c, a, b)) {
-    const std::string problem = poseProblem(c, radius, q, tolerance_mm);
+    const std::string problem = poseProblem(c, radius, q, tolerance_mm, r);
     if (!problem.empty()) {
       why = problem;
       return false;
     }
-    worst = std::max(worst, std::abs(inspect(c, radius, q).deviation_mm));
+    worst = std::max(worst, std::abs(r.deviation_mm));
   }
   return true;
 }
@@ -279,13 +289,15 @@ bool ShellPlanner::planArc(const Connection& c, double radius, const ArmConfig& 
                            const Node& a, const Node& b, int depth, std::vector<PlanStep>& vias,
                            double& worst, std::string& why) const {
   double seg_worst = 0;
-  if (segmentOk(c, radius, a.q, b.q, kPlannerToleranceFraction * cell_.motion.via_tolerance_mm,
-                seg_worst, why)) {
+  if (segmentOk(c, radius, a.q, b.q,
+                kPlannerToleranceFraction * cell_.motion.via_tolerance_mm + a.slack_mm, seg_worst,
+                why)) {
     worst = std::max(worst, seg_worst);
     return true;
   }
   if (depth >= kMaxBisections) return false;
   Node mid;
+  mid.slack_mm = 0;
   mid.n = slerp(a.n, b.n, 0.5);
   latLonOf(mid.n, mid.lat_deg, mid.lon_deg);
   Eigen::Quaterniond qa = a.rotation, qb = b.rotation;
@@ -614,26 +626,60 @@ ShellPlan ShellPlanner::replanRemaining(const ShellPlan& old, std::size_t next_s
   double lat, lon;
   latLonOf((ball - model().chucks_mm[c.chuck_index]).normalized(), lat, lon);
   Node prev = nodeFor(c, radius, lat, lon, here, current);
-  for (size_t i = next_step; i < old.steps.size(); ++i) {
-    const PlanStep& step = old.steps[i];
-    if (step.kind != StepKind::kPoint) continue;
-    // The old joints' orientation under this model, with the ball put back on the shell.
+  prev.slack_mm = std::abs(inspect(c, radius, current).deviation_mm);
+  // The old joints' orientation under this model, with the ball put back on the shell, refined
+  // from the old joints: cheap, since the models differ little.
+  auto carry = [&](const PlanStep& step, IkSolution& s) {
     Eigen::Isometry3d pose = ik_.kinematics().toolPose(step.joints_deg);
     pose.translation() = model().chucks_mm[c.chuck_index] +
                          radius * unitOnSphere(step.lat_deg, step.lon_deg) -
                          pose.linear() * model().balls_mm[c.ball_index];
-    IkSolution s = ik_.refine(pose, shell.config, step.joints_deg);
+    s = ik_.refine(pose, shell.config, step.joints_deg);
+    return pose;
+  };
+  std::vector<Node> old_vias;  // the old vias since the last point, carried over
+  for (size_t i = next_step; i < old.steps.size(); ++i) {
+    const PlanStep& step = old.steps[i];
+    IkSolution s;
+    const Eigen::Isometry3d pose = carry(step, s);
+    if (step.kind == StepKind::kVia) {
+      if (s.ok() && poseProblem(c, radius, s.joints_deg, cell_.motion.via_tolerance_mm).empty())
+        old_vias.push_back(nodeFor(c, radius, step.lat_deg, step.lon_deg, pose, s.joints_deg));
+      continue;
+    }
     if (!s.ok()) s = ik_.solve(pose, shell.config, &prev.q);
     std::string why = s.ok() ? poseProblem(c, radius, s.joints_deg, cell_.motion.via_tolerance_mm)
                              : std::string("IK: ") + ikStatusName(s.status);
     if (!why.empty()) {
       shell.dropped.push_back({step.lat_deg, step.lon_deg, why});
+      old_vias.clear();
       continue;
     }
     const Node node = nodeFor(c, radius, step.lat_deg, step.lon_deg, pose, s.joints_deg);
+    // Through the carried-over vias first (bisecting where a move needs more), else afresh.
     std::vector<PlanStep> vias;
-    if (!planArc(c, radius, shell.config, prev, node, 0, vias, shell.summary.max_deviation_mm,
-                 why)) {
+    bool joined = true;
+    const Node* from = &prev;
+    for (const Node& v : old_vias) {
+      std::string ignored;
+      if (!planArc(c, radius, shell.config, *from, v, 0, vias, shell.summary.max_deviation_mm,
+                   ignored)) {
+        joined = false;
+        break;
+      }
+      vias.push_back({StepKind::kVia, v.q, v.lat_deg, v.lon_deg});
+      from = &v;
+    }
+    if (joined)
+      joined = planArc(c, radius, shell.config, *from, node, 0, vias,
+                       shell.summary.max_deviation_mm, why);
+    if (!joined) {
+      vias.clear();
+      joined = planArc(c, radius, shell.config, prev, node, 0, vias, shell.summary.max_deviation_mm,
+                       why);
+    }
+    old_vias.clear();
+    if (!joined) {
       shell.dropped.push_back(
           {step.lat_deg, step.lon_deg, "no safe path from the previous step: " + why});
       continue;

@@ -124,6 +124,8 @@ class ShellPlanner {
 
  private:
   struct Node;
+  std::string poseProblem(const Connection& c, double radius, const JointsDeg& q,
+                          double tolerance_mm, PoseReport& report) const;
   bool planArc(const Connection& c, double radius, const ArmConfig& config, const Node& a,
                const Node& b, int depth, std::vector<PlanStep>& vias, double& worst,
                std::string& why) const;
