@@ -330,6 +330,11 @@ TEST_CASE("re-planning the rest of a shell with a refined model keeps it safe fo
   CHECK(new_points + static_cast<int>(fresh.dropped.size() - old.dropped.size()) == old_points);
   CHECK(new_points >= old_points - 2);
 
+  // From the very start too: the connect pose is off the refined model's shell by the model
+  // difference, and the first move is allowed that much.
+  const ShellPlan whole = planner.replanRemaining(old, 0, old.connect.joints_deg);
+  CHECK(whole.summary.points >= old.summary.points - 2);
+
   // The new steps keep every rule for the refined model. (The robot's current pose was planned
   // for the old model, so the check starts at the first re-planned step.)
   Plan rest;
