@@ -288,9 +288,14 @@ bool ValReplyCollector::feed(std::string_view bytes) {
   splitter_.feed(bytes, got);
   for (const auto& l : got) {
     if (complete_) break;
+    ++line_endings_;
     line(l);
   }
-  if (!complete_ && dialect_.isPrompt(splitter_.pending())) complete_ = true;
+  // A prompt without a line ending ends the reply once a line has ended since the command was
+  // sent: before that it may be the prompt the controller echoes in front of the command.
+  if (!complete_ && (line_endings_ > 0 || command_.empty()) &&
+      dialect_.isPrompt(splitter_.pending()))
+    complete_ = true;
   return complete_;
 }
 
@@ -298,9 +303,9 @@ void ValReplyCollector::line(const std::string& text) {
   std::string t = trim(text);
   if (t.empty()) return;
   if (dialect_.isPrompt(t)) {
-    // A prompt alone on a line ends the reply once something came back; before that it is the
+    // A prompt alone on a line ends the reply unless it is the very first line: that is the
     // previous command's prompt (a controller that ends its prompt with a line ending).
-    if (echo_seen_ || !lines_.empty() || !errors_.empty() || command_.empty()) complete_ = true;
+    if (echo_seen_ || line_endings_ > 1 || command_.empty()) complete_ = true;
     return;
   }
   if (!echo_seen_) {
@@ -424,7 +429,7 @@ WhereReply parseWhere(const std::vector<std::string>& lines, const ValConfig& co
 std::vector<std::string> formatWhere(const ValConfig& config, const WhereLayout& layout,
                                      const Location6& location, const Joints6& joints) {
   const auto cell = [&](const std::string& s) {
-    std::string out(static_cast<std::size_t>(std::max(0, layout.column_width - int(s.size()))),
+    std::string out(static_cast<std::size_t>(std::max(1, layout.column_width - int(s.size()))),
                     ' ');
     return out + s;
   };

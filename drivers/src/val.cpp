@@ -115,6 +115,7 @@ std::vector<std::string> ValController::command(const std::string& text, double 
   errors.insert(errors.end(), reply.errors().begin(), reply.errors().end());
   if (!errors.empty()) {
     ++stats_.controller_errors;
+    out_of_sync_ = true;  // an unsolicited error may have cut a reply short: drain before the next
     dialect_.throwError(text, errors.front());
   }
   return reply.lines();

@@ -111,6 +111,7 @@ class ValReplyCollector {
   std::vector<std::string> lines_, errors_;
   std::string raw_;
   bool complete_ = false, echo_seen_ = false;
+  int line_endings_ = 0;
 };
 
 struct WhereReply {

@@ -1,0 +1,59 @@
+// The drivers configuration: defaults, JSON parsing, errors that name the key.
+#include <robocal/drivers/config.hpp>
+#include <robocal/drivers/errors.hpp>
+
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+using namespace robocal::drivers;
+using nlohmann::json;
+
+namespace {
+std::string errorOf(const std::string& text) {
+  try {
+    driversConfigFromJson(json::parse(text), "cell.json");
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+}  // namespace
+
+TEST_CASE("Config: defaults are hardware.md's and survive a JSON round trip", "[drivers][config]") {
+  const DriversConfig d;
+  CHECK(d.val.prompt == ".");
+  CHECK(d.val.serial.baud == 9600);
+  CHECK(d.val.where_command == "WHERE");
+  CHECK(d.bar.mode == "polled");
+  const DriversConfig back = driversConfigFromJson(toJson(d), "round trip");
+  CHECK(toJson(back) == toJson(d));
+  CHECK_NOTHROW(driversConfigFromJson(json::object(), "empty"));
+}
+
+TEST_CASE("Config: the shipped example parses", "[drivers][config]") {
+  const DriversConfig c = loadDriversConfig(ROBOCAL_SOURCE_DIR "/config/drivers.json");
+  CHECK(c.val.serial.baud == 9600);
+  CHECK_FALSE(c.bar.value_regex.empty());
+}
+
+TEST_CASE("Config: errors name the key", "[drivers][config]") {
+  CHECK_THAT(errorOf(R"({"val": {"serial": {"baud": "fast"}}})"),
+             Catch::Contains("cell.json: val.serial.baud: expected a whole number"));
+  CHECK_THAT(errorOf(R"({"val": {"promt": ">"}})"), Catch::Contains("val.promt: unknown key"));
+  CHECK_THAT(errorOf(R"({"bar": {"value_regex": "([0-9]"}})"),
+             Catch::Contains("bar.value_regex: not a valid regular expression"));
+  CHECK_THAT(errorOf(R"({"bar": {"value_regex": "[0-9]+"}})"),
+             Catch::Contains("bar.value_regex: the regular expression needs 1 capture"));
+  CHECK_THAT(errorOf(R"({"val": {"move_joints_command": "MOVE {j1} {j2}"}})"),
+             Catch::Contains("val.move_joints_command: needs the field {j3}"));
+  CHECK_THAT(errorOf(R"({"val": {"speed_command": "SPEED {sped}"}})"),
+             Catch::Contains("val.speed_command: unknown field {sped}"));
+  CHECK_THAT(errorOf(R"({"bar": {"mode": "pushed"}})"), Catch::Contains("bar.mode"));
+  CHECK_THAT(errorOf(R"({"bar": {"format": "csv"}})"), Catch::Contains("bar.format"));
+  CHECK_THAT(errorOf(R"({"val": {"joint_headers": ["JT1"]}})"),
+             Catch::Contains("val.joint_headers"));
+  CHECK_THAT(errorOf(R"({"val": {"where_timeout_s": 0}})"), Catch::Contains("val.where_timeout_s"));
+  CHECK_THAT(errorOf(R"({"val": {"serial": {"parity": "sometimes"}}})"),
+             Catch::Contains("val.serial.parity"));
+  CHECK_THAT(errorOf(R"([1, 2])"), Catch::Contains("cell.json"));
+}
