@@ -7,6 +7,7 @@
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <stdexcept>
 
 namespace robocal {
@@ -65,18 +66,46 @@ SolveResult solveCalibration(const Model& start, const std::vector<Sample>& samp
                              const SolveOptions& opt) {
   checkSamples(samples);
   const Eigen::Index m = static_cast<Eigen::Index>(samples.size());
+  const bool prior = opt.prior_sigma.has_value();
+  if (prior && !(opt.prior_sigma->array() > 0).all())
+    throw std::invalid_argument("prior sigmas must all be positive");
+  const ParamVector start_params = toParams(start);
+  const Eigen::Index rows = m + (prior ? kParamCount : 0);
 
   // Allocation up front: the Jacobian, residuals and the normal equations are reused.
-  Eigen::MatrixXd jac(m, kParamCount);
-  Eigen::VectorXd residuals(m), candidate_residuals(m);
+  Eigen::MatrixXd jac(rows, kParamCount);
+  Eigen::VectorXd residuals(rows), candidate_residuals(rows);
+  Eigen::MatrixXd sample_jac;
+  Eigen::VectorXd sample_residuals;
   Eigen::Matrix<double, kParamCount, kParamCount> jtj;
-  ParamVector params = toParams(start);
+  ParamVector params = start_params;
+
+  // Residuals (and the Jacobian when asked) of the samples, then of the prior rows.
+  auto evaluate = [&](const ParamVector& p, Eigen::VectorXd& r, Eigen::MatrixXd* j) {
+    if (!prior) {
+      evaluateProblem(start, p, samples, r, j);
+      return;
+    }
+    evaluateProblem(start, p, samples, sample_residuals, j ? &sample_jac : nullptr);
+    r.head(m) = sample_residuals;
+    r.tail(kParamCount) = (start_params - p).cwiseQuotient(*opt.prior_sigma);
+    if (j) {
+      j->topRows(m) = sample_jac;
+      j->bottomRows(kParamCount) = (-opt.prior_sigma->cwiseInverse()).asDiagonal();
+    }
+  };
 
   SolveResult result;
-  evaluateProblem(start, params, samples, residuals, &jac);
-  result.before = residualStats(residuals);
-  result.identifiability = analyzeIdentifiability(jac);
-  for (int i : result.identifiability.identified)
+  evaluate(params, residuals, &jac);
+  result.before = residualStats(residuals.head(m));
+  result.identifiability = analyzeIdentifiability(prior ? Eigen::MatrixXd(jac.topRows(m)) : jac);
+  // With a prior every parameter is estimated; without, the identifiable basis.
+  std::vector<int> candidates = result.identifiability.identified;
+  if (prior) {
+    candidates.resize(kParamCount);
+    std::iota(candidates.begin(), candidates.end(), 0);
+  }
+  for (int i : candidates)
     if (std::find(opt.fixed.begin(), opt.fixed.end(), i) == opt.fixed.end())
       result.free_params.push_back(i);
   const auto& free = result.free_params;
@@ -96,8 +125,8 @@ SolveResult solveCalibration(const Model& start, const std::vector<Sample>& samp
     for (Eigen::Index i = 0; i < r; ++i) {
       g[i] = jtr[free[i]] / scale[i];
       for (Eigen::Index k = 0; k <= i; ++k)
-        a(i, k) = a(k, i) =
-            jtj(std::max(free[i], free[k]), std::min(free[i], free[k])) / (scale[i] * scale[k]);
+        a(i, k) = a(k, i) = jtj(std::max(free[i], free[k]), std::min(free[i], free[k])) /
+                            (scale[i] * scale[k]);
     }
   };
 
@@ -124,7 +153,7 @@ SolveResult solveCalibration(const Model& start, const std::vector<Sample>& samp
 
     ParamVector trial = params;
     for (Eigen::Index k = 0; k < r; ++k) trial[free[k]] += step[k] / scale[k];
-    evaluateProblem(start, trial, samples, candidate_residuals, nullptr);
+    evaluate(trial, candidate_residuals, nullptr);
     const double trial_cost = 0.5 * candidate_residuals.squaredNorm();
     const double predicted = -(g.dot(step) + 0.5 * step.dot(a * step));
     const double rho = (cost - trial_cost) / predicted;
@@ -137,7 +166,7 @@ SolveResult solveCalibration(const Model& start, const std::vector<Sample>& samp
       cost = trial_cost;
       lambda *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3));
       nu = 2.0;
-      evaluateProblem(start, params, samples, residuals, &jac);
+      evaluate(params, residuals, &jac);
       have_normal_equations = false;
       if (decrease <= opt.cost_change_tol * (cost + decrease)) {
         result.stop = StopReason::kCostChange;
@@ -158,22 +187,22 @@ SolveResult solveCalibration(const Model& start, const std::vector<Sample>& samp
   }
 
   result.params = params;
-  result.residuals = residuals;
-  result.after = residualStats(residuals);
-  const Eigen::Index dof = std::max<Eigen::Index>(1, m - r);
-  result.sigma_mm = std::sqrt(residuals.squaredNorm() / dof);
+  result.residuals = residuals.head(m);
+  result.after = residualStats(result.residuals);
+  const Eigen::Index dof = std::max<Eigen::Index>(1, m - (prior ? 0 : r));
+  result.sigma_mm = std::sqrt(result.residuals.squaredNorm() / dof);
 
   // Statistics at the solution, on the scaled free columns.
   result.covariance = Eigen::MatrixXd::Zero(kParamCount, kParamCount);
   if (r > 0) {
     normalEquations();
-    Eigen::MatrixXd scaled_free(m, r);
+    Eigen::MatrixXd scaled_free(rows, r);
     for (Eigen::Index k = 0; k < r; ++k) scaled_free.col(k) = jac.col(free[k]) / scale[k];
     const Eigen::VectorXd sv =
         Eigen::JacobiSVD<Eigen::MatrixXd>(triangularFactor(scaled_free)).singularValues();
     result.o3 = sv[r - 1];
     result.condition_number = sv[0] / sv[r - 1];
-    result.o1 = std::exp(sv.array().log().mean()) / std::sqrt(static_cast<double>(m));
+    result.o1 = std::exp(sv.array().log().mean()) / std::sqrt(static_cast<double>(rows));
     const Eigen::MatrixXd inv = a.ldlt().solve(Eigen::MatrixXd::Identity(r, r));
     const double var = result.sigma_mm * result.sigma_mm;
     for (Eigen::Index i = 0; i < r; ++i)

@@ -13,6 +13,7 @@
 #include <robocal/kinematics/sample.hpp>
 #include <robocal/solver/identifiability.hpp>
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -26,6 +27,11 @@ struct SolveOptions {
   double initial_lambda = 1e-4;    // damping, relative to the diagonal of the scaled J^T J
   // Parameters to hold fixed in addition to the redundant ones (indices into ParamVector).
   std::vector<int> fixed;
+  // A prior: when set (all positive), each parameter also gets the residual
+  // (start - p) / prior_sigma, so every parameter is estimated, pulled toward its start value
+  // where the data say little. For fits of a few samples (keeping the bar centred while a shell
+  // runs); the covariance then includes the prior.
+  std::optional<ParamVector> prior_sigma;
 };
 
 enum class StopReason { kCostChange, kStepSize, kGradient, kMaxIterations, kNoProgress };

@@ -1,0 +1,68 @@
+// The TCP side of robocald: accepts clients, splits their bytes into request lines (bounded),
+// and sends each client its own bounded queue of JSON lines. A slow watcher loses BAR readings
+// (counted), a stuck one is disconnected; neither ever blocks the event loop or other clients.
+#pragma once
+
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/asio/steady_timer.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <deque>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+
+namespace robocal::daemon {
+
+struct HubLimits {
+  int max_clients = 64;
+  std::size_t max_line_bytes = 16 * 1024;
+  std::size_t queue_max = 4096;  // queued lines per client; past it droppable lines are dropped
+  double stall_s = 5.0;          // queued data and no write progress this long: disconnect
+};
+
+class ClientHub {
+ public:
+  using ClientId = std::uint64_t;
+  // Called on the event loop for each complete request line of a client.
+  using LineHandler = std::function<void(ClientId, const std::string& line)>;
+
+  ClientHub(boost::asio::io_context& io, HubLimits limits, LineHandler on_line,
+            std::function<nlohmann::json()> greeting);
+  ~ClientHub();
+
+  // Binds and listens; returns the bound port (useful with port 0). Throws on failure.
+  unsigned short listen(const std::string& address, unsigned short port);
+
+  void send(ClientId client, const nlohmann::json& object);
+  // To every client that asked to watch. Droppable objects (BAR) are skipped for full queues.
+  void broadcast(const nlohmann::json& object, bool droppable);
+  void setWatching(ClientId client, bool watching);
+  std::size_t clientCount() const { return clients_.size(); }
+  nlohmann::json stats() const;
+
+ private:
+  struct Client;
+  void accept();
+  void read(const std::shared_ptr<Client>& c);
+  void enqueue(const std::shared_ptr<Client>& c, std::string line, bool droppable);
+  void write(const std::shared_ptr<Client>& c);
+  void close(const std::shared_ptr<Client>& c, const std::string& why);
+  void checkStalls();
+
+  boost::asio::io_context& io_;
+  HubLimits limits_;
+  LineHandler on_line_;
+  std::function<nlohmann::json()> greeting_;
+  boost::asio::ip::tcp::acceptor acceptor_;
+  boost::asio::steady_timer stall_timer_;
+  std::map<ClientId, std::shared_ptr<Client>> clients_;
+  ClientId next_id_ = 1;
+  long refused_ = 0, stalled_ = 0, dropped_lines_ = 0;
+};
+
+}  // namespace robocal::daemon

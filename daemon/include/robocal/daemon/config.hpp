@@ -1,0 +1,45 @@
+// robocald's configuration file (docs/robocald.md). Every key is validated at start: unknown
+// keys, wrong types and out-of-range values are refused with the key's name.
+#pragma once
+
+#include <robocal/drivers/config.hpp>
+
+#include <stdexcept>
+#include <string>
+
+namespace robocal::daemon {
+
+class ConfigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct DaemonConfig {
+  std::string listen_address = "127.0.0.1";
+  int port = 7687;
+  std::string data_dir = "/var/lib/robocald";  // runs/<id>/ below it
+  std::string token_file;                      // default: <data_dir>/token (mode 0600)
+  std::string model;                           // nominal model file (required)
+  std::string cell;                            // cell file for planning (required)
+  std::string plan;                            // a fixed plan file to run by default (optional)
+  double settle_s = 2.0;                       // dwell at each data point before recording
+  double bar_window_s = 0.2;                   // bar readings averaged after the dwell
+  double bar_soft_limit_mm = 1.0;  // |deflection| past this during a move: stop and re-centre
+  double bar_hard_limit_mm = 1.8;  // past this: stop the robot and pause the run
+  bool centering = true;           // refine the model and re-plan while a shell runs
+  int max_clients = 64;
+  std::size_t max_line_bytes = 16 * 1024;
+  std::size_t client_queue_max = 4096;  // messages queued to one client; past it readings drop
+  double client_stall_s = 5.0;          // a client that takes nothing this long is disconnected
+  std::string log_file;                 // optional, besides stderr (journald)
+  std::string log_level = "info";       // trace, debug, info, warn, error
+  double watchdog_interval_s = 0;       // 0: from $WATCHDOG_USEC when systemd sets it
+  drivers::DriversConfig drivers;
+};
+
+// Parses the file; relative paths in it are taken relative to the file's folder.
+DaemonConfig loadDaemonConfig(const std::string& path);
+DaemonConfig daemonConfigFromJson(const nlohmann::json& json, const std::string& source,
+                                  const std::string& base_dir);
+
+}  // namespace robocal::daemon

@@ -1,0 +1,54 @@
+// The calibration run: a state machine on its own thread that owns the two drivers (on the
+// thread's own io_context). It checks the plan before anything moves, asks the operator for each
+// connection, moves through the steps watching the bar, dwells, records every sample durably,
+// keeps the bar centred by re-planning with a model refined from the data so far, and hands each
+// completed shell set to the solver on a worker thread. Commands arrive from the client loop
+// through thread-safe calls; events go back through `publish`.
+#pragma once
+
+#include <robocal/daemon/config.hpp>
+#include <robocal/daemon/run_store.hpp>
+#include <robocal/kinematics/model.hpp>
+#include <robocal/planner/plan.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include <atomic>
+#include <condition_variable>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+
+namespace robocal::daemon {
+
+class RunController {
+ public:
+  // Called from the run and solver threads; must be thread-safe (robocald posts to its loop).
+  using Publish = std::function<void(nlohmann::json object, bool droppable)>;
+
+  RunController(DaemonConfig config, Model nominal, std::optional<CellConfig> cell,
+                Publish publish);
+  ~RunController();
+  RunController(const RunController&) = delete;
+  RunController& operator=(const RunController&) = delete;
+
+  // Each returns an error message for the operator, or "" when accepted.
+  std::string start(const Plan& plan);
+  std::string confirm(std::optional<int> shell);
+  std::string pause(const std::string& reason);
+  std::string resume(const std::string& run_id);
+  std::string abort(const std::string& reason);
+
+  nlohmann::json status() const;  // a STATUS object
+  nlohmann::json result() const;  // the latest RESULT object (or an empty one)
+  nlohmann::json runs() const;    // a RUNS object
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace robocal::daemon

@@ -1,0 +1,53 @@
+// Run directories under <data_dir>/runs/<id>/: the plan, the samples (CSV, each row fsynced
+// before the robot moves on), the event log (JSON lines), the run's state, re-plans and results.
+// The samples file is the record of progress: a restarted daemon resumes from what it holds.
+#pragma once
+
+#include <robocal/kinematics/sample.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace robocal::daemon {
+
+class RunDir {
+ public:
+  explicit RunDir(std::string path);  // an existing run folder
+  const std::string& path() const { return path_; }
+  std::string id() const;
+  std::string file(const std::string& name) const { return path_ + "/" + name; }
+
+  // Appends one row (the samples format plus bar_spread_mm) and fsyncs it.
+  void appendSample(const Sample& sample, double bar_spread_mm);
+  // The samples on disk. A row torn by a crash (no line ending) is cut off first.
+  std::vector<Sample> loadSamples();
+  // Appends {"time": ISO-8601, ...event} to events.jsonl and fsyncs it.
+  void logEvent(nlohmann::json event);
+  // state.json: {"status": "running" | "paused" | "interrupted" | "done" | "aborted", ...}.
+  nlohmann::json state() const;
+  void setState(const nlohmann::json& state);
+  void writeJson(const std::string& name, const nlohmann::json& value) const;
+
+ private:
+  std::string path_;
+};
+
+class RunStore {
+ public:
+  explicit RunStore(std::string data_dir);
+  // A new run folder with its plan (JSON text) and an empty samples file.
+  RunDir create(const std::string& plan_text);
+  // Run ids, oldest first.
+  std::vector<std::string> ids() const;
+  RunDir open(const std::string& id) const;
+  // The newest run whose state is neither done nor aborted.
+  std::optional<std::string> latestUnfinished() const;
+
+ private:
+  std::string runs_dir_;
+};
+
+}  // namespace robocal::daemon

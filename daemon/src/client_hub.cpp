@@ -1,0 +1,222 @@
+#include <robocal/daemon/client_hub.hpp>
+
+#include <robocal/proto/protocol.hpp>
+
+#include <spdlog/spdlog.h>
+#include <boost/asio/write.hpp>
+
+#include <array>
+
+namespace robocal::daemon {
+
+namespace asio = boost::asio;
+using tcp = asio::ip::tcp;
+using Clock = std::chrono::steady_clock;
+
+struct ClientHub::Client {
+  explicit Client(asio::io_context& io) : socket(io) {}
+  ClientId id = 0;
+  tcp::socket socket;
+  std::string peer;
+  std::array<char, 4096> buffer{};
+  std::string line;
+  bool discarding = false;  // inside a line that was too long
+  bool watching = false;
+  bool writing = false;
+  bool closed = false;
+  std::deque<std::string> queue;
+  Clock::time_point last_progress = Clock::now();
+  long dropped = 0;
+};
+
+ClientHub::ClientHub(asio::io_context& io, HubLimits limits, LineHandler on_line,
+                     std::function<nlohmann::json()> greeting)
+    : io_(io),
+      limits_(limits),
+      on_line_(std::move(on_line)),
+      greeting_(std::move(greeting)),
+      acceptor_(io),
+      stall_timer_(io) {}
+
+ClientHub::~ClientHub() {
+  boost::system::error_code ec;
+  acceptor_.close(ec);
+  stall_timer_.cancel();
+  for (auto& [id, c] : clients_) c->socket.close(ec);
+}
+
+unsigned short ClientHub::listen(const std::string& address, unsigned short port) {
+  const tcp::endpoint endpoint(asio::ip::make_address(address), port);
+  acceptor_.open(endpoint.protocol());
+  acceptor_.set_option(tcp::acceptor::reuse_address(true));
+  acceptor_.bind(endpoint);
+  acceptor_.listen();
+  accept();
+  checkStalls();
+  return acceptor_.local_endpoint().port();
+}
+
+void ClientHub::accept() {
+  auto c = std::make_shared<Client>(io_);
+  acceptor_.async_accept(c->socket, [this, c](const boost::system::error_code& ec) {
+    if (ec == asio::error::operation_aborted) return;
+    if (!ec) {
+      boost::system::error_code peer_ec;
+      const auto remote = c->socket.remote_endpoint(peer_ec);
+      c->peer = peer_ec ? "?" : remote.address().to_string() + ":" + std::to_string(remote.port());
+      if (static_cast<int>(clients_.size()) >= limits_.max_clients) {
+        ++refused_;
+        spdlog::warn("client {} refused: {} clients already connected", c->peer, clients_.size());
+        const std::string msg = proto::frame(proto::errorObject(
+            "too many clients (" + std::to_string(limits_.max_clients) + "); try again later"));
+        boost::system::error_code wec;
+        asio::write(c->socket, asio::buffer(msg), wec);
+        c->socket.close(wec);
+      } else {
+        c->id = next_id_++;
+        clients_[c->id] = c;
+        spdlog::info("client {} connected from {}", c->id, c->peer);
+        enqueue(c, proto::frame(greeting_()), false);
+        read(c);
+      }
+    } else {
+      spdlog::warn("accept failed: {}", ec.message());
+    }
+    accept();
+  });
+}
+
+void ClientHub::read(const std::shared_ptr<Client>& c) {
+  c->socket.async_read_some(
+      asio::buffer(c->buffer), [this, c](const boost::system::error_code& ec, std::size_t n) {
+        if (c->closed) return;
+        if (ec) {
+          close(c, ec == asio::error::eof ? "disconnected" : ec.message());
+          return;
+        }
+        for (std::size_t i = 0; i < n && !c->closed; ++i) {
+          const char ch = c->buffer[i];
+          if (ch == '\n') {
+            if (c->discarding) {
+              c->discarding = false;
+              enqueue(c,
+                      proto::frame(proto::errorObject("request longer than " +
+                                                      std::to_string(limits_.max_line_bytes) +
+                                                      " bytes, ignored")),
+                      false);
+            } else {
+              std::string line;
+              line.swap(c->line);
+              if (!line.empty() && line.back() == '\r') line.pop_back();
+              if (!line.empty()) on_line_(c->id, line);
+            }
+          } else if (!c->discarding) {
+            c->line.push_back(ch);
+            if (c->line.size() > limits_.max_line_bytes) {
+              c->line.clear();
+              c->line.shrink_to_fit();
+              c->discarding = true;
+            }
+          }
+        }
+        if (!c->closed) read(c);
+      });
+}
+
+void ClientHub::send(ClientId id, const nlohmann::json& object) {
+  const auto it = clients_.find(id);
+  if (it != clients_.end()) enqueue(it->second, proto::frame(object), false);
+}
+
+void ClientHub::broadcast(const nlohmann::json& object, bool droppable) {
+  if (clients_.empty()) return;
+  const std::string line = proto::frame(object);
+  // Copy: enqueue may close (and erase) a client.
+  std::vector<std::shared_ptr<Client>> targets;
+  for (const auto& [id, c] : clients_)
+    if (c->watching) targets.push_back(c);
+  for (const auto& c : targets) enqueue(c, line, droppable);
+}
+
+void ClientHub::setWatching(ClientId id, bool watching) {
+  const auto it = clients_.find(id);
+  if (it != clients_.end()) it->second->watching = watching;
+}
+
+void ClientHub::enqueue(const std::shared_ptr<Client>& c, std::string line, bool droppable) {
+  if (c->closed) return;
+  if (c->queue.size() >= limits_.queue_max) {
+    if (droppable) {
+      ++c->dropped;
+      ++dropped_lines_;
+      return;
+    }
+    if (c->queue.size() >= 2 * limits_.queue_max) {
+      close(c, "send queue full (client does not read)");
+      return;
+    }
+  }
+  if (c->queue.empty()) c->last_progress = Clock::now();
+  c->queue.push_back(std::move(line));
+  if (!c->writing) write(c);
+}
+
+void ClientHub::write(const std::shared_ptr<Client>& c) {
+  if (c->queue.empty() || c->closed) return;
+  c->writing = true;
+  asio::async_write(c->socket, asio::buffer(c->queue.front()),
+                    [this, c](const boost::system::error_code& ec, std::size_t) {
+                      c->writing = false;
+                      if (c->closed) return;
+                      if (ec) {
+                        close(c, ec.message());
+                        return;
+                      }
+                      c->queue.pop_front();
+                      c->last_progress = Clock::now();
+                      write(c);
+                    });
+}
+
+void ClientHub::close(const std::shared_ptr<Client>& c, const std::string& why) {
+  if (c->closed) return;
+  c->closed = true;
+  boost::system::error_code ec;
+  c->socket.shutdown(tcp::socket::shutdown_both, ec);
+  c->socket.close(ec);
+  clients_.erase(c->id);
+  spdlog::info("client {} ({}) closed: {}; {} readings dropped for it", c->id, c->peer, why,
+               c->dropped);
+}
+
+void ClientHub::checkStalls() {
+  const auto stall = std::chrono::duration<double>(limits_.stall_s);
+  std::vector<std::shared_ptr<Client>> stuck;
+  for (const auto& [id, c] : clients_)
+    if (!c->queue.empty() && Clock::now() - c->last_progress > stall) stuck.push_back(c);
+  for (const auto& c : stuck) {
+    ++stalled_;
+    close(c, "stuck: took nothing for " + std::to_string(limits_.stall_s) + " s");
+  }
+  stall_timer_.expires_after(std::chrono::milliseconds(250));
+  stall_timer_.async_wait([this](const boost::system::error_code& ec) {
+    if (!ec) checkStalls();
+  });
+}
+
+nlohmann::json ClientHub::stats() const {
+  nlohmann::json per = nlohmann::json::array();
+  for (const auto& [id, c] : clients_)
+    per.push_back({{"id", id},
+                   {"peer", c->peer},
+                   {"watching", c->watching},
+                   {"queued", c->queue.size()},
+                   {"dropped", c->dropped}});
+  return {{"connected", clients_.size()},
+          {"refused", refused_},
+          {"stalled", stalled_},
+          {"dropped_lines", dropped_lines_},
+          {"clients", per}};
+}
+
+}  // namespace robocal::daemon

@@ -1,0 +1,326 @@
+// robocald: the robot-cell daemon. One Boost.Asio event loop serves the clients (JSON lines over
+// TCP); the run thread owns the serial drivers; planning and fits run on worker threads.
+#include <robocal/daemon/client_hub.hpp>
+#include <robocal/daemon/config.hpp>
+#include <robocal/daemon/run.hpp>
+#include <robocal/formats/model_json.hpp>
+#include <robocal/planner/cell_json.hpp>
+#include <robocal/planner/check.hpp>
+#include <robocal/planner/plan_json.hpp>
+#include <robocal/proto/protocol.hpp>
+
+#include <spdlog/sinks/basic_file_sink.h>
+#include <spdlog/sinks/stdout_sinks.h>
+#include <spdlog/spdlog.h>
+#include <systemd/sd-daemon.h>
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/post.hpp>
+#include <boost/asio/signal_set.hpp>
+#include <boost/asio/steady_timer.hpp>
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <future>
+
+namespace asio = boost::asio;
+using json = nlohmann::json;
+using namespace robocal;
+using namespace robocal::daemon;
+
+namespace {
+
+constexpr const char* kRelease = "0.1.0";
+
+// The token file holds a random secret (mode 0600), made at first start.
+std::string loadOrCreateToken(const std::string& path) {
+  std::error_code ec;
+  std::filesystem::create_directories(std::filesystem::path(path).parent_path(), ec);
+  if (!std::filesystem::exists(path)) {
+    unsigned char raw[24];
+    const int rnd = ::open("/dev/urandom", O_RDONLY | O_CLOEXEC);
+    if (rnd < 0 || ::read(rnd, raw, sizeof raw) != static_cast<ssize_t>(sizeof raw))
+      throw std::runtime_error("cannot read /dev/urandom for the token");
+    ::close(rnd);
+    std::string token;
+    for (unsigned char b : raw) {
+      char hex[3];
+      std::snprintf(hex, sizeof hex, "%02x", b);
+      token += hex;
+    }
+    const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+    if (fd < 0)
+      throw std::runtime_error(path + ": cannot create the token file: " + std::strerror(errno));
+    const std::string line = token + "\n";
+    const bool ok = ::write(fd, line.data(), line.size()) == static_cast<ssize_t>(line.size());
+    ::fsync(fd);
+    ::close(fd);
+    if (!ok) throw std::runtime_error(path + ": cannot write the token");
+    spdlog::info("created token file {}", path);
+  }
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0 && (st.st_mode & 077))
+    spdlog::warn("token file {} is readable by others (mode {:o}); chmod 600 it", path,
+                 st.st_mode & 0777);
+  std::string token = readTextFile(path);
+  while (!token.empty() && (token.back() == '\n' || token.back() == '\r' || token.back() == ' '))
+    token.pop_back();
+  if (token.size() < 16)
+    throw std::runtime_error(path + ": the token is shorter than 16 characters");
+  return token;
+}
+
+bool sameToken(const std::string& a, const std::string& b) {
+  unsigned char diff = a.size() == b.size() ? 0 : 1;
+  for (std::size_t i = 0; i < a.size(); ++i) diff |= a[i] ^ b[i % std::max<size_t>(1, b.size())];
+  return diff == 0;
+}
+
+json planObject(const Plan& plan, const std::string& source) {
+  const auto& s = plan.summary;
+  return {{"class", "PLAN"},
+          {"source", source},
+          {"shells", s.shells},
+          {"points", s.points},
+          {"vias", s.vias},
+          {"dropped", s.dropped},
+          {"duration_s", s.duration_s},
+          {"rank", s.rank},
+          {"condition_number", s.condition_number},
+          {"max_deviation_mm", s.max_deviation_mm},
+          {"predicted_deflection_mm", s.predicted_deflection_mm}};
+}
+
+class Daemon {
+ public:
+  Daemon(asio::io_context& io, DaemonConfig config)
+      : io_(io),
+        config_(std::move(config)),
+        nominal_(loadModelFile(config_.model)),
+        cell_(config_.cell.empty() ? std::nullopt : std::optional(loadCellFile(config_.cell))),
+        token_(loadOrCreateToken(config_.token_file)),
+        hub_(
+            io,
+            {config_.max_clients, config_.max_line_bytes, config_.client_queue_max,
+             config_.client_stall_s},
+            [this](ClientHub::ClientId id, const std::string& line) { onLine(id, line); },
+            [] { return proto::versionObject(kRelease); }),
+        run_(config_, nominal_, cell_, [this](json object, bool droppable) {
+          // From the run and solver threads into the event loop.
+          asio::post(io_, [this, object = std::move(object), droppable] {
+            hub_.broadcast(object, droppable);
+          });
+        }) {}
+
+  unsigned short listen() {
+    return hub_.listen(config_.listen_address, static_cast<unsigned short>(config_.port));
+  }
+
+ private:
+  void onLine(ClientHub::ClientId id, const std::string& line) {
+    proto::Request req;
+    try {
+      req = proto::parseRequest(line);
+    } catch (const proto::RequestError& e) {
+      hub_.send(id, proto::errorObject(e.what(), e.cmd()));
+      return;
+    }
+    const std::string cmd = proto::cmdName(req.cmd);
+    if (proto::needsToken(req.cmd) && !sameToken(req.token, token_)) {
+      spdlog::warn("client {}: {} refused: {}", id, cmd,
+                   req.token.empty() ? "no token" : "wrong token");
+      hub_.send(id, proto::errorObject(req.token.empty() ? cmd + " needs the token (\"token\": ...)"
+                                                         : "wrong token for " + cmd,
+                                       cmd));
+      return;
+    }
+    auto reply = [this, id, &req](const std::string& error, const std::string& ok_message = {}) {
+      hub_.send(id, error.empty() ? proto::ackObject(req.cmd, ok_message)
+                                  : proto::errorObject(error, proto::cmdName(req.cmd)));
+    };
+    switch (req.cmd) {
+      case proto::Cmd::kStatus: {
+        json s = run_.status();
+        s["clients"] = hub_.clientCount();
+        if (plan_) s["plan"] = planObject(*plan_, plan_source_);
+        hub_.send(id, s);
+        break;
+      }
+      case proto::Cmd::kWatch:
+        hub_.setWatching(id, req.watch_enable);
+        hub_.send(id, {{"class", "WATCH"}, {"enable", req.watch_enable}});
+        if (req.watch_enable) hub_.send(id, run_.status());
+        break;
+      case proto::Cmd::kResult:
+        hub_.send(id, run_.result());
+        break;
+      case proto::Cmd::kRuns:
+        hub_.send(id, run_.runs());
+        break;
+      case proto::Cmd::kPlan:
+        makePlan(id, req.plan_path, req.cell_path, false);
+        break;
+      case proto::Cmd::kStart:
+        if (!req.plan_path.empty() || !plan_)
+          makePlan(id, req.plan_path, {}, true);
+        else
+          reply(run_.start(*plan_), "run starting with " + plan_source_);
+        break;
+      case proto::Cmd::kConfirm:
+        reply(run_.confirm(req.shell));
+        break;
+      case proto::Cmd::kPause:
+        reply(run_.pause(req.reason), "pausing at the next step");
+        break;
+      case proto::Cmd::kResume:
+        reply(run_.resume(req.run_id), "resuming");
+        break;
+      case proto::Cmd::kAbort:
+        reply(run_.abort(req.reason), "robot stopped, run aborted");
+        break;
+    }
+  }
+
+  // Loads or makes a plan on a worker thread (planning takes up to seconds), then replies on the
+  // event loop and, for start, starts the run with it.
+  void makePlan(ClientHub::ClientId id, const std::string& plan_path, const std::string& cell_path,
+                bool then_start) {
+    if (planning_) {
+      hub_.send(id, proto::errorObject("a plan is being made; try again in a moment", "plan"));
+      return;
+    }
+    planning_ = true;
+    const std::string path =
+        !plan_path.empty() ? plan_path : (cell_path.empty() ? config_.plan : "");
+    std::thread([this, id, path, cell_path, then_start] {
+      std::optional<Plan> plan;
+      std::string source, error;
+      try {
+        if (!path.empty()) {
+          plan = loadPlanFile(path);
+          source = path;
+        } else {
+          const CellConfig cell = !cell_path.empty() ? loadCellFile(cell_path)
+                                  : cell_
+                                      ? *cell_
+                                      : throw std::runtime_error("no cell configured to plan with");
+          plan = planCell(nominal_, cell);
+          source = !cell_path.empty() ? cell_path : config_.cell;
+        }
+        const auto violations = checkPlan(nominal_, cell_ ? *cell_ : plan->cell, *plan);
+        if (!violations.empty())
+          error = source + ": " + std::to_string(violations.size()) +
+                  " safety violations, first: " + describeViolation(violations.front());
+      } catch (const std::exception& e) {
+        error = e.what();
+      }
+      asio::post(io_, [this, id, plan = std::move(plan), source, error, then_start]() mutable {
+        planning_ = false;
+        if (!error.empty()) {
+          hub_.send(id, proto::errorObject(error, then_start ? "start" : "plan"));
+          return;
+        }
+        plan_ = std::move(plan);
+        plan_source_ = source;
+        hub_.send(id, planObject(*plan_, plan_source_));
+        if (then_start) {
+          const std::string err = run_.start(*plan_);
+          hub_.send(id, err.empty()
+                            ? proto::ackObject(proto::Cmd::kStart, "run starting with " + source)
+                            : proto::errorObject(err, "start"));
+        }
+      });
+    }).detach();
+  }
+
+  asio::io_context& io_;
+  DaemonConfig config_;
+  Model nominal_;
+  std::optional<CellConfig> cell_;
+  std::string token_;
+  ClientHub hub_;
+  RunController run_;
+  std::optional<Plan> plan_;
+  std::string plan_source_;
+  bool planning_ = false;
+};
+
+void setupLogging(const DaemonConfig& config) {
+  std::vector<spdlog::sink_ptr> sinks{std::make_shared<spdlog::sinks::stderr_sink_mt>()};
+  if (!config.log_file.empty())
+    sinks.push_back(std::make_shared<spdlog::sinks::basic_file_sink_mt>(config.log_file));
+  auto logger = std::make_shared<spdlog::logger>("robocald", sinks.begin(), sinks.end());
+  logger->set_level(spdlog::level::from_str(config.log_level));
+  logger->flush_on(spdlog::level::info);
+  spdlog::set_default_logger(logger);
+}
+
+// The systemd watchdog is pinged from the event loop itself: a stalled loop stops the pings.
+void watchdog(asio::steady_timer& timer, double interval_s) {
+  sd_notify(0, "WATCHDOG=1");
+  timer.expires_after(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(interval_s)));
+  timer.async_wait([&timer, interval_s](const boost::system::error_code& ec) {
+    if (!ec) watchdog(timer, interval_s);
+  });
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string config_path = "/etc/robocald/robocald.json";
+  int port_override = -1;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if ((a == "--config" || a == "-c") && i + 1 < argc) {
+      config_path = argv[++i];
+    } else if (a == "--port" && i + 1 < argc) {
+      port_override = std::atoi(argv[++i]);
+    } else if (a == "--help" || a == "-h") {
+      std::printf("usage: robocald [--config FILE] [--port N]\n  default config: %s\n",
+                  config_path.c_str());
+      return 0;
+    } else {
+      std::fprintf(stderr, "robocald: unknown argument '%s' (robocald --help)\n", a.c_str());
+      return 2;
+    }
+  }
+  DaemonConfig config;
+  try {
+    config = loadDaemonConfig(config_path);
+    if (port_override >= 0) config.port = port_override;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "robocald: %s\n", e.what());
+    return 2;
+  }
+  setupLogging(config);
+  try {
+    asio::io_context io;
+    Daemon daemon(io, config);
+    const unsigned short port = daemon.listen();
+    spdlog::info("robocald {} listening on {}:{}", kRelease, config.listen_address, port);
+    std::printf("listening %s %u\n", config.listen_address.c_str(), port);
+    std::fflush(stdout);
+
+    asio::signal_set signals(io, SIGINT, SIGTERM);
+    signals.async_wait([&](const boost::system::error_code&, int sig) {
+      spdlog::info("signal {}: stopping", sig);
+      sd_notify(0, "STOPPING=1");
+      io.stop();
+    });
+    asio::steady_timer watchdog_timer(io);
+    uint64_t usec = 0;
+    double interval = config.watchdog_interval_s;
+    if (interval <= 0 && sd_watchdog_enabled(0, &usec) > 0) interval = usec / 2e6;
+    if (interval > 0) watchdog(watchdog_timer, interval);
+    sd_notify(0, "READY=1");
+    io.run();
+  } catch (const std::exception& e) {
+    spdlog::critical("robocald: {}", e.what());
+    return 1;
+  }
+  return 0;
+}

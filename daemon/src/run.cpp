@@ -1,0 +1,887 @@
+#include <robocal/daemon/run.hpp>
+
+#include <robocal/drivers/bar.hpp>
+#include <robocal/drivers/errors.hpp>
+#include <robocal/drivers/val.hpp>
+#include <robocal/formats/model_json.hpp>
+#include <robocal/formats/report.hpp>
+#include <robocal/formats/samples_csv.hpp>
+#include <robocal/kinematics/kinematics.hpp>
+#include <robocal/planner/check.hpp>
+#include <robocal/planner/plan_json.hpp>
+#include <robocal/solver/calibrate.hpp>
+
+#include <spdlog/spdlog.h>
+#include <boost/asio/io_context.hpp>
+
+#include <Eigen/LU>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <future>
+#include <numbers>
+#include <set>
+
+namespace robocal::daemon {
+namespace {
+
+using json = nlohmann::json;
+using Clock = std::chrono::steady_clock;
+namespace asio = boost::asio;
+
+constexpr double kRadPerDeg = std::numbers::pi / 180.0;
+
+// Why the run left the normal path. Pause and fault leave it resumable; abort does not.
+struct StopRun {
+  enum Kind { kPause, kFault, kAbort } kind;
+  std::string reason;
+};
+// The bar passed the soft limit during a move: stop, correct, re-plan.
+struct Recentre {
+  double deflection_mm;
+};
+
+drivers::Joints6 toDriver(const JointsDeg& q) {
+  drivers::Joints6 out{};
+  for (int j = 0; j < kJointCount; ++j) out[j] = q[j];
+  return out;
+}
+JointsDeg fromDriver(const drivers::Joints6& q) {
+  JointsDeg out;
+  for (int j = 0; j < kJointCount; ++j) out[j] = q[j];
+  return out;
+}
+
+std::int64_t monotonicMicros(Clock::time_point t) {
+  return std::chrono::duration_cast<std::chrono::microseconds>(t.time_since_epoch()).count();
+}
+
+// A data point of a shell, as the samples file identifies it.
+std::pair<double, double> pointKey(double lat_deg, double lon_deg) {
+  return {std::round(lat_deg * 1e3) / 1e3, std::round(lon_deg * 1e3) / 1e3};
+}
+
+}  // namespace
+
+struct RunController::Impl {
+  DaemonConfig config;
+  Model nominal;
+  std::optional<CellConfig> cell;
+  Publish publish;
+  RunStore store;
+
+  // --- shared with the client loop (under mutex) ---
+  mutable std::mutex mutex;
+  std::condition_variable wake;
+  struct Job {
+    enum Kind { kStart, kResume } kind;
+    Plan plan;
+    std::string run_id;
+  };
+  std::optional<Job> job;
+  std::string state = "idle";
+  std::string state_reason;
+  std::string run_id;        // current or last run
+  std::string resumable_id;  // a paused or interrupted run
+  json prompt;               // the pending PROMPT, null when none
+  int prompt_shell = 0;
+  int confirms = 0;
+  int shell_number = 0, shells_total = 0, points_done = 0, points_total = 0;
+  double eta_s = 0;
+  json latest_bar;
+  json last_result;
+  bool val_connected = false, bar_connected = false;
+  std::atomic<bool> abort_requested{false}, pause_requested{false}, quit{false};
+  std::string stop_reason;
+
+  // --- run thread only ---
+  asio::io_context io;
+  std::unique_ptr<drivers::ValController> val;
+  std::unique_ptr<drivers::BarReader> bar;
+  std::optional<drivers::BarReading> last_reading;
+  std::vector<double> window;  // readings collected while averaging
+  bool collecting = false;
+  double bar_offset_mm = 0;  // nominal + extension of the attached bar (0: none attached)
+  std::future<void> solver;
+  std::thread thread;
+
+  Impl(DaemonConfig c, Model m, std::optional<CellConfig> cell_config, Publish p)
+      : config(std::move(c)),
+        nominal(std::move(m)),
+        cell(std::move(cell_config)),
+        publish(std::move(p)),
+        store(config.data_dir) {
+    if (auto id = store.latestUnfinished()) {
+      RunDir dir = store.open(*id);
+      json st = dir.state();
+      if (st.value("status", "") == "running") {
+        st["status"] = "interrupted";
+        dir.setState(st);
+        dir.logEvent({{"event", "interrupted"}, {"detail", "found unfinished at daemon start"}});
+      }
+      resumable_id = *id;
+      run_id = *id;
+      state = "interrupted";
+      state_reason = "run " + *id + " was interrupted; resume continues it";
+    }
+    thread = std::thread([this] { threadMain(); });
+  }
+
+  ~Impl() {
+    quit = true;
+    abort_requested = true;
+    wake.notify_all();
+    if (thread.joinable()) thread.join();
+    if (solver.valid()) solver.wait();
+  }
+
+  // ------------------------------------------------------------------ state and events
+  void setState(const std::string& s, const std::string& reason = {}) {
+    std::string from;
+    {
+      std::lock_guard lock(mutex);
+      from = state;
+      state = s;
+      state_reason = reason;
+    }
+    json ev = {{"class", "STATE"}, {"from", from}, {"to", s}};
+    if (!reason.empty()) ev["reason"] = reason;
+    spdlog::info("state {} -> {}{}{}", from, s, reason.empty() ? "" : ": ", reason);
+    publish(ev, false);
+  }
+
+  void event(RunDir& dir, json ev) {
+    dir.logEvent(ev);
+    ev["class"] = "EVENT";
+    publish(ev, false);
+  }
+
+  void checkpoint() {
+    if (abort_requested) throw StopRun{StopRun::kAbort, stopReason("abort requested")};
+    if (pause_requested) throw StopRun{StopRun::kPause, stopReason("pause requested")};
+  }
+  std::string stopReason(const std::string& fallback) {
+    std::lock_guard lock(mutex);
+    return stop_reason.empty() ? fallback : stop_reason;
+  }
+
+  // ------------------------------------------------------------------ devices
+  void onBarLine(const drivers::BarReading& r) {
+    last_reading = r;
+    if (collecting && r.kind == drivers::BarLineKind::kReading) window.push_back(r.value_mm);
+    json b = {{"class", "BAR"},
+              {"seq", r.sequence},
+              {"kind", drivers::barLineKindName(r.kind)},
+              {"t_us", monotonicMicros(r.time)}};
+    if (r.kind == drivers::BarLineKind::kReading) {
+      b["deflection_mm"] = r.value_mm;
+      if (bar_offset_mm > 0) b["length_mm"] = bar_offset_mm + r.value_mm;
+    }
+    {
+      std::lock_guard lock(mutex);
+      latest_bar = b;
+    }
+    publish(b, true);
+  }
+
+  void ensureDevices(bool need_val) {
+    if (!bar) {
+      bar = std::make_unique<drivers::BarReader>(io, config.drivers.bar);
+      bar->onLine([this](const drivers::BarReading& r) { onBarLine(r); });
+    }
+    if (!bar->isConnected()) {
+      bar->connect();
+      spdlog::info("ball-bar reader connected");
+    }
+    if (need_val) {
+      if (!val) val = std::make_unique<drivers::ValController>(io, config.drivers.val);
+      if (!val->isConnected()) {
+        val->connect();
+        spdlog::info("VAL II controller connected");
+      }
+    }
+    std::lock_guard lock(mutex);
+    bar_connected = bar && bar->isConnected();
+    val_connected = val && val->isConnected();
+  }
+
+  // Runs the driver loop for a while (bar lines arrive), checking stop requests.
+  void spin(double seconds, bool watch_bar) {
+    const auto until = Clock::now() + std::chrono::duration<double>(seconds);
+    while (Clock::now() < until) {
+      checkpoint();
+      io.restart();
+      io.run_for(std::chrono::milliseconds(10));
+      if (watch_bar) watchBar(false);
+    }
+  }
+
+  // Throws StopRun (fault) when the bar is out of range, silent, or past the hard limit; and
+  // Recentre past the soft limit when asked.
+  void watchBar(bool recentre) {
+    if (!bar || !bar->isConnected()) throw StopRun{StopRun::kFault, "ball-bar reader disconnected"};
+    if (bar->isStale())
+      throw StopRun{StopRun::kFault, "no ball-bar reading for " +
+                                         std::to_string(config.drivers.bar.stale_after_s) + " s"};
+    if (!last_reading) return;
+    if (last_reading->kind != drivers::BarLineKind::kReading)
+      throw StopRun{StopRun::kFault, std::string("ball-bar reports ") +
+                                         drivers::barLineKindName(last_reading->kind)};
+    const double d = last_reading->value_mm;
+    if (std::abs(d) > config.bar_hard_limit_mm)
+      throw StopRun{StopRun::kFault, "bar deflection " + std::to_string(d) +
+                                         " mm past the hard limit " +
+                                         std::to_string(config.bar_hard_limit_mm) + " mm"};
+    if (recentre && std::abs(d) > config.bar_soft_limit_mm) throw Recentre{d};
+  }
+
+  // A joint move, watched: stop requests, the bar (when attached), controller errors.
+  JointsDeg move(const JointsDeg& target, bool bar_attached, bool recentre) {
+    checkpoint();
+    const drivers::WhereReply w =
+        val->moveJoints(toDriver(target), [&](const drivers::WhereReply&) {
+          checkpoint();
+          if (bar_attached) watchBar(recentre);
+        });
+    return fromDriver(w.joints_deg);
+  }
+
+  void stopRobot() {
+    if (!val || !val->isConnected()) return;
+    try {
+      val->abort();
+    } catch (const std::exception& e) {
+      spdlog::error("ABORT failed: {}", e.what());
+    }
+  }
+
+  // ------------------------------------------------------------------ the operator
+  void waitConfirm(RunDir& dir, json prompt_object, int shell) {
+    int seen;
+    {
+      std::lock_guard lock(mutex);
+      prompt = prompt_object;
+      prompt_shell = shell;
+      seen = confirms;
+    }
+    setState("awaiting_confirm", prompt_object.value("message", ""));
+    dir.logEvent({{"event", "prompt"}, {"prompt", prompt_object}});
+    publish(prompt_object, false);
+    while (true) {
+      checkpoint();
+      {
+        std::lock_guard lock(mutex);
+        if (confirms != seen) {
+          prompt = nullptr;
+          break;
+        }
+      }
+      io.restart();
+      io.run_for(std::chrono::milliseconds(20));
+    }
+    dir.logEvent({{"event", "confirmed"}, {"shell", shell}});
+  }
+
+  // ------------------------------------------------------------------ the run
+  const CellConfig& cellFor(const Plan& plan) const { return cell ? *cell : plan.cell; }
+
+  Model refine(const std::vector<Sample>& samples, const Plan& plan) {
+    const ModelUncertainty& u = cellFor(plan).uncertainty;
+    ParamVector sigma;
+    for (int i = 0; i < kParamCount; ++i) {
+      const bool joint = (i % (kLinkParamCount + kJointParamCount)) >= kLinkParamCount;
+      switch (paramKind(i)) {
+        case ParamKind::kTranslation:
+          sigma[i] = u.translation_sigma_mm;
+          break;
+        case ParamKind::kAngle:
+          sigma[i] = (joint ? u.joint_offset_sigma_deg : u.link_angle_sigma_deg) * kRadPerDeg;
+          break;
+        case ParamKind::kGain:
+          sigma[i] = u.gain_sigma;
+          break;
+      }
+    }
+    SolveOptions opt;
+    opt.prior_sigma = 3.0 * sigma;  // generous: the prior only steadies what data cannot see
+    opt.max_iterations = 20;
+    return withParams(nominal, solveCalibration(nominal, samples, opt).params);
+  }
+
+  void recordReplan(RunDir& dir, int& replans, const ShellPlan& shell, std::size_t next,
+                    const std::string& why) {
+    ++replans;
+    json steps = json::array();
+    for (std::size_t i = next; i < shell.steps.size(); ++i) {
+      const auto& s = shell.steps[i];
+      steps.push_back(
+          {{"kind", s.kind == StepKind::kPoint ? "point" : "via"},
+           {"joints", std::vector<double>(s.joints_deg.data(), s.joints_deg.data() + 6)},
+           {"lat_deg", s.lat_deg},
+           {"lon_deg", s.lon_deg}});
+    }
+    std::filesystem::create_directories(dir.file("replans"));
+    dir.writeJson("replans/" + std::to_string(replans) + ".json",
+                  {{"shell", shell.shell}, {"from_step", next}, {"why", why}, {"steps", steps}});
+    dir.logEvent({{"event", "replan"},
+                  {"shell", shell.shell},
+                  {"from_step", next},
+                  {"why", why},
+                  {"file", "replans/" + std::to_string(replans) + ".json"}});
+  }
+
+  // The corrective move toward zero deflection: the ball moved along the bar by -deflection.
+  JointsDeg correction(const Model& model, const Connection& c, const JointsDeg& q,
+                       double deflection_mm) {
+    const Kinematics kin(model);
+    const Eigen::Vector3d ball = kin.ballPosition(q, model.balls_mm[c.ball_index]);
+    const Eigen::Vector3d u = (ball - model.chucks_mm[c.chuck_index]).normalized();
+    const Eigen::Matrix<double, 3, 6> jac =
+        kin.jointJacobian(q, model.balls_mm[c.ball_index]).topRows<3>();
+    const Eigen::Vector3d move = -deflection_mm * u;
+    const Eigen::Matrix<double, 6, 1> dq =
+        jac.transpose() * (jac * jac.transpose()).partialPivLu().solve(move);
+    return q + dq / kRadPerDeg;
+  }
+
+  void updateProgress(int done, int total, Clock::time_point started, int done_at_start) {
+    const double elapsed = std::chrono::duration<double>(Clock::now() - started).count();
+    const int measured = done - done_at_start;
+    json p;
+    {
+      std::lock_guard lock(mutex);
+      points_done = done;
+      points_total = total;
+      eta_s = measured > 0 ? elapsed / measured * (total - done) : 0;
+      p = {{"class", "PROGRESS"}, {"shell", shell_number}, {"shells", shells_total},
+           {"points_done", done}, {"points_total", total}, {"eta_s", eta_s}};
+    }
+    publish(p, false);
+  }
+
+  void launchFit(RunDir dir, std::vector<Sample> all, double set_extension_mm, int set_index) {
+    if (solver.valid()) solver.wait();
+    std::optional<Model> previous;
+    {
+      std::lock_guard lock(mutex);
+      if (last_result.contains("calibrated_file") && last_result.value("run", "") == dir.id())
+        previous = loadModelFile(last_result["calibrated_file"].get<std::string>());
+    }
+    solver = std::async(std::launch::async, [this, dir, all = std::move(all), set_extension_mm,
+                                             set_index, previous]() mutable {
+      try {
+        std::vector<Sample> set;
+        for (const Sample& s : all)
+          if (std::abs(s.extension_mm - set_extension_mm) < 1e-6) set.push_back(s);
+        json prediction;
+        if (previous) {
+          const ResidualStats v = residualStats(sampleResiduals(*previous, set));
+          prediction = {{"n", v.count}, {"rms_mm", v.rms_mm}, {"max_abs_mm", v.max_abs_mm}};
+        }
+        const SolveResult fit = solveCalibration(nominal, all);
+        const Model calibrated = withParams(nominal, fit.params);
+        const std::string name = "set" + std::to_string(set_index);
+        const std::string model_file = dir.file("calibrated-" + name + ".json");
+        saveModelFile(model_file, calibrated);
+        const std::vector<Outlier> outliers = findOutliers(fit.residuals, 5.0);
+        const std::vector<Sample> none;
+        const Eigen::VectorXd no_residuals;
+        const auto errors = predictedBallErrors(calibrated, fit.covariance, all);
+        double rms = 0, worst = 0;
+        for (double e : errors) {
+          rms += e * e;
+          worst = std::max(worst, e);
+        }
+        rms = std::sqrt(rms / std::max<size_t>(1, errors.size()));
+        FitReport report{nominal,
+                         calibrated,
+                         all,
+                         fit,
+                         outliers,
+                         none,
+                         none,
+                         no_residuals,
+                         rms,
+                         worst,
+                         barToEndpointErrorFactor(calibrated, all),
+                         {},
+                         5.0};
+        writeReport(dir.file("report-" + name), report);
+        json result = fitSummaryJson(report);
+        result["class"] = "RESULT";
+        result["run"] = dir.id();
+        result["set"] = set_index;
+        result["extension_mm"] = set_extension_mm;
+        result["calibrated_file"] = model_file;
+        result["report_dir"] = dir.file("report-" + name);
+        result["samples_file"] = dir.file("samples.csv");
+        if (!prediction.is_null()) {
+          result["prediction"] = prediction;
+          result["validation_rms_mm"] = prediction["rms_mm"];
+        }
+        dir.writeJson("result-" + name + ".json", result);
+        dir.logEvent({{"event", "result"}, {"set", set_index}, {"rms_mm", fit.after.rms_mm}});
+        {
+          std::lock_guard lock(mutex);
+          last_result = result;
+        }
+        publish(result, false);
+      } catch (const std::exception& e) {
+        spdlog::error("solver failed: {}", e.what());
+        publish({{"class", "ERROR"}, {"message", std::string("solver failed: ") + e.what()}},
+                false);
+      }
+    });
+  }
+
+  void runShells(RunDir& dir, const Plan& plan, bool resuming) {
+    const CellConfig& cell_config = cellFor(plan);
+    std::vector<Sample> samples = dir.loadSamples();
+    std::set<std::tuple<int, double, double>> done;
+    for (const Sample& s : samples) {
+      const auto [lat, lon] = pointKey(s.lat_deg, s.lon_deg);
+      done.insert({s.shell, lat, lon});
+    }
+    int total = 0;
+    for (const auto& sh : plan.shells)
+      for (const auto& st : sh.steps) total += st.kind == StepKind::kPoint;
+    const int done_at_start = static_cast<int>(samples.size());
+    const auto started = Clock::now();
+    {
+      std::lock_guard lock(mutex);
+      shells_total = static_cast<int>(plan.shells.size());
+    }
+    updateProgress(done_at_start, total, started, done_at_start);
+
+    bool bar_maybe_attached = resuming;
+    int replans = 0;
+    std::optional<Model> refined;
+    if (config.centering && !samples.empty()) refined = refine(samples, plan);
+
+    for (std::size_t si = 0; si < plan.shells.size(); ++si) {
+      const ShellPlan& planned = plan.shells[si];
+      const auto is_done = [&](const PlanStep& st) {
+        const auto [lat, lon] = pointKey(st.lat_deg, st.lon_deg);
+        return done.count({planned.shell, lat, lon}) > 0;
+      };
+      int remaining = 0, already = 0;
+      for (const auto& st : planned.steps)
+        if (st.kind == StepKind::kPoint) (is_done(st) ? already : remaining)++;
+      if (remaining == 0) continue;
+      {
+        std::lock_guard lock(mutex);
+        shell_number = planned.shell;
+      }
+      const Connection c = planned.connection;
+      const std::string conn = connectionName(c);
+
+      if (bar_maybe_attached) {
+        bar_offset_mm = 0;
+        waitConfirm(dir,
+                    {{"class", "PROMPT"},
+                     {"action", "detach"},
+                     {"shell", planned.shell},
+                     {"message", "Detach the ball-bar from the robot, then confirm."}},
+                    planned.shell);
+        bar_maybe_attached = false;
+      }
+      setState("moving", "to shell " + std::to_string(planned.shell) + "'s connect pose");
+      JointsDeg q = move(planned.connect.joints_deg, false, false);
+      waitConfirm(
+          dir,
+          {{"class", "PROMPT"},
+           {"action", "connect"},
+           {"shell", planned.shell},
+           {"ball", c.ball_index + 1},
+           {"chuck", c.chuck_index + 1},
+           {"extension_mm", planned.extension_mm},
+           {"message",
+            "Connect ball " + std::to_string(c.ball_index + 1) + " to chuck " +
+                std::to_string(c.chuck_index + 1) +
+                (planned.extension_mm > 0
+                     ? " with the " + std::to_string(static_cast<int>(planned.extension_mm)) +
+                           " mm extension"
+                     : " without extension") +
+                ", then confirm."}},
+          planned.shell);
+      bar_maybe_attached = true;
+      bar_offset_mm = cell_config.bar.nominal_length_mm + planned.extension_mm;
+      // The bar must read, and read near zero, before anything moves with it attached.
+      last_reading.reset();
+      spin(std::min(1.0, config.drivers.bar.stale_after_s), false);
+      if (!last_reading)
+        throw StopRun{StopRun::kFault, "no ball-bar reading after connecting " + conn};
+      watchBar(false);
+      dir.logEvent({{"event", "connected"},
+                    {"shell", planned.shell},
+                    {"connection", conn},
+                    {"deflection_mm", last_reading->value_mm}});
+      // The model's error shows at the connect pose already: move the ball along the bar to
+      // zero deflection before the shell starts.
+      for (int k = 0; k < 3 && std::abs(last_reading->value_mm) > 0.5 * config.bar_soft_limit_mm;
+           ++k) {
+        const double d = last_reading->value_mm;
+        event(
+            dir,
+            {{"event", "recentre"}, {"shell", planned.shell}, {"step", -1}, {"deflection_mm", d}});
+        q = move(correction(refined ? *refined : nominal, c, q, d), true, false);
+        last_reading.reset();
+        spin(0.2, false);
+        if (!last_reading) throw StopRun{StopRun::kFault, "no ball-bar reading after re-centring"};
+        watchBar(false);
+      }
+
+      // What is left of the shell, re-planned from here when points are done or the model is
+      // refined.
+      ShellPlan shell = planned;
+      if (already > 0) {
+        shell.steps.clear();
+        for (const auto& st : planned.steps)
+          if (st.kind == StepKind::kPoint && !is_done(st)) shell.steps.push_back(st);
+      }
+      if (already > 0 || refined) {
+        const ShellPlanner planner(refined ? *refined : nominal, cell_config);
+        shell = planner.replanRemaining(shell, 0, q);
+        recordReplan(dir, replans, shell, 0, already > 0 ? "resume" : "refined model");
+      }
+
+      setState("measuring", "shell " + std::to_string(planned.shell) + " " + conn);
+      int corrections = 0;
+      std::size_t next = 0;
+      while (next < shell.steps.size()) {
+        const PlanStep& step = shell.steps[next];
+        try {
+          q = move(step.joints_deg, true, config.centering);
+        } catch (const Recentre& r) {
+          stopRobot();
+          if (++corrections > 20)
+            throw StopRun{StopRun::kFault,
+                          "cannot keep the bar centred on shell " + std::to_string(planned.shell)};
+          q = fromDriver(val->where().joints_deg);
+          const Model& model = refined ? *refined : nominal;
+          event(dir, {{"event", "recentre"},
+                      {"shell", planned.shell},
+                      {"step", next},
+                      {"deflection_mm", r.deflection_mm}});
+          q = move(correction(model, c, q, r.deflection_mm), true, false);
+          const ShellPlanner planner(model, cell_config);
+          shell = planner.replanRemaining(shell, next, q);
+          recordReplan(dir, replans, shell, next, "recentre");
+          continue;
+        }
+        if (step.kind == StepKind::kPoint) {
+          const auto motion_end = Clock::now();
+          spin(config.settle_s, true);
+          const double dwell_s = std::chrono::duration<double>(Clock::now() - motion_end).count();
+          const JointsDeg actual = fromDriver(val->where().joints_deg);
+          window.clear();
+          collecting = true;
+          spin(config.bar_window_s, true);
+          const auto window_deadline =
+              Clock::now() + std::chrono::duration<double>(config.drivers.bar.stale_after_s);
+          while (window.empty() && Clock::now() < window_deadline) spin(0.02, true);
+          collecting = false;
+          if (window.empty()) throw StopRun{StopRun::kFault, "no bar reading at a data point"};
+          double sum = 0, lo = window.front(), hi = window.front();
+          for (double v : window) {
+            sum += v;
+            lo = std::min(lo, v);
+            hi = std::max(hi, v);
+          }
+          Sample s;
+          s.shell = planned.shell;
+          s.ball_index = c.ball_index;
+          s.chuck_index = c.chuck_index;
+          s.extension_mm = planned.extension_mm;
+          s.lat_deg = step.lat_deg;
+          s.lon_deg = step.lon_deg;
+          s.joints_deg = actual;
+          s.length_mm = bar_offset_mm + sum / window.size();
+          dir.appendSample(s, hi - lo);  // on disk before the robot moves again
+          samples.push_back(s);
+          const auto [lat, lon] = pointKey(s.lat_deg, s.lon_deg);
+          done.insert({s.shell, lat, lon});
+          publish({{"class", "SAMPLE"},
+                   {"shell", s.shell},
+                   {"lat_deg", s.lat_deg},
+                   {"lon_deg", s.lon_deg},
+                   {"joints", std::vector<double>(actual.data(), actual.data() + 6)},
+                   {"length_mm", s.length_mm},
+                   {"spread_mm", hi - lo},
+                   {"readings", window.size()},
+                   {"dwell_s", dwell_s}},
+                  false);
+          updateProgress(static_cast<int>(samples.size()), total, started, done_at_start);
+          if (config.centering && next + 1 < shell.steps.size()) {
+            refined = refine(samples, plan);
+            const ShellPlanner planner(*refined, cell_config);
+            shell = planner.replanRemaining(shell, next + 1, actual);
+            recordReplan(dir, replans, shell, next + 1, "refined model");
+          }
+        }
+        ++next;
+      }
+      // A shell set is complete when no later shell has the same extension.
+      bool set_complete = true;
+      for (std::size_t k = si + 1; k < plan.shells.size(); ++k)
+        if (plan.shells[k].extension_mm == planned.extension_mm) set_complete = false;
+      if (set_complete) {
+        int set_index = 1;
+        std::vector<double> seen;
+        for (const auto& sh : plan.shells) {
+          if (std::find(seen.begin(), seen.end(), sh.extension_mm) == seen.end())
+            seen.push_back(sh.extension_mm);
+          if (sh.extension_mm == planned.extension_mm) break;
+        }
+        set_index = static_cast<int>(seen.size());
+        event(dir, {{"event", "set_complete"},
+                    {"set", set_index},
+                    {"extension_mm", planned.extension_mm}});
+        launchFit(dir, samples, planned.extension_mm, set_index);
+      }
+    }
+    if (bar_maybe_attached) {
+      bar_offset_mm = 0;
+      publish({{"class", "PROMPT"},
+               {"action", "detach"},
+               {"shell", 0},
+               {"message", "The run is complete: detach the ball-bar."}},
+              false);
+    }
+  }
+
+  void execute(Job job) {
+    abort_requested = false;
+    pause_requested = false;
+    {
+      std::lock_guard lock(mutex);
+      stop_reason.clear();
+    }
+    std::optional<RunDir> dir;
+    try {
+      Plan plan = job.plan;
+      if (job.kind == Job::kStart) {
+        dir = store.create(formatPlan(plan));
+      } else {
+        dir = store.open(job.run_id);
+        plan = parsePlan(readTextFile(dir->file("plan.json")), dir->file("plan.json"));
+      }
+      {
+        std::lock_guard lock(mutex);
+        run_id = dir->id();
+        resumable_id.clear();
+      }
+      dir->setState({{"status", "running"}});
+      dir->logEvent({{"event", job.kind == Job::kStart ? "start" : "resume"}});
+      setState("checking", "run " + dir->id() + ": checking the plan");
+      const auto violations = checkPlan(nominal, cellFor(plan), plan);
+      if (!violations.empty()) {
+        json list = json::array();
+        for (const auto& v : violations) list.push_back(describeViolation(v));
+        dir->logEvent({{"event", "plan_rejected"}, {"violations", list}});
+        dir->setState({{"status", "aborted"}, {"reason", "plan failed the safety check"}});
+        publish({{"class", "ERROR"},
+                 {"message", std::to_string(violations.size()) +
+                                 " safety violations in the plan; nothing moved"},
+                 {"violations", list}},
+                false);
+        setState("error", "plan failed the safety check: " + describeViolation(violations.front()));
+        return;
+      }
+      ensureDevices(true);
+      runShells(*dir, plan, job.kind == Job::kResume);
+      dir->setState({{"status", "done"}});
+      dir->logEvent({{"event", "done"}});
+      setState("solving", "waiting for the last fit");
+      if (solver.valid()) solver.wait();
+      setState("done", "run " + dir->id() + " complete");
+    } catch (const StopRun& stop) {
+      stopRobot();
+      handleStop(dir, stop);
+    } catch (const Recentre&) {
+      stopRobot();
+      handleStop(dir, {StopRun::kFault, "bar past the soft limit"});
+    } catch (const drivers::DriverError& e) {
+      stopRobot();
+      handleStop(dir, {StopRun::kFault, e.what()});
+    } catch (const std::exception& e) {
+      stopRobot();
+      handleStop(dir, {StopRun::kFault, std::string("error: ") + e.what()});
+    }
+    std::lock_guard lock(mutex);
+    prompt = nullptr;
+  }
+
+  void handleStop(std::optional<RunDir>& dir, const StopRun& stop) {
+    bar_offset_mm = 0;
+    const bool aborted = stop.kind == StopRun::kAbort;
+    const std::string status = aborted ? "aborted" : "paused";
+    if (dir) {
+      try {
+        dir->setState({{"status", status}, {"reason", stop.reason}});
+        dir->logEvent({{"event", status}, {"reason", stop.reason}});
+      } catch (const std::exception& e) {
+        spdlog::error("cannot record the stop: {}", e.what());
+      }
+      if (!aborted) {
+        std::lock_guard lock(mutex);
+        resumable_id = dir->id();
+      }
+    }
+    spdlog::warn("run {}: {}", status, stop.reason);
+    setState(status, stop.reason + (aborted ? "" : "; the robot is stopped, resume continues"));
+  }
+
+  void threadMain() {
+    auto next_connect = Clock::now();
+    while (!quit) {
+      std::optional<Job> todo;
+      {
+        std::unique_lock lock(mutex);
+        if (job) {
+          todo = std::move(job);
+          job.reset();
+        }
+      }
+      if (todo) {
+        execute(std::move(*todo));
+        continue;
+      }
+      // Idle: keep the bar streaming to watchers, reconnecting now and then.
+      if (Clock::now() >= next_connect && (!bar || !bar->isConnected())) {
+        next_connect = Clock::now() + std::chrono::seconds(2);
+        try {
+          ensureDevices(false);
+        } catch (const std::exception& e) {
+          spdlog::debug("bar not connected: {}", e.what());
+        }
+      }
+      io.restart();
+      io.run_for(std::chrono::milliseconds(20));
+      if (io.stopped()) {
+        std::unique_lock lock(mutex);
+        wake.wait_for(lock, std::chrono::milliseconds(20));
+      }
+    }
+  }
+
+  json statusObject() const {
+    std::lock_guard lock(mutex);
+    json s = {{"class", "STATUS"},
+              {"state", state},
+              {"reason", state_reason},
+              {"run", run_id},
+              {"shell", shell_number},
+              {"shells", shells_total},
+              {"points_done", points_done},
+              {"points_total", points_total},
+              {"eta_s", eta_s},
+              {"devices", {{"val", val_connected}, {"bar", bar_connected}}}};
+    if (!resumable_id.empty()) s["resumable"] = resumable_id;
+    if (!prompt.is_null()) s["prompt"] = prompt;
+    if (!latest_bar.is_null()) s["bar"] = latest_bar;
+    return s;
+  }
+};
+
+RunController::RunController(DaemonConfig config, Model nominal, std::optional<CellConfig> cell,
+                             Publish publish)
+    : impl_(std::make_unique<Impl>(std::move(config), std::move(nominal), std::move(cell),
+                                   std::move(publish))) {}
+
+RunController::~RunController() = default;
+
+namespace {
+bool busy(const std::string& state) {
+  return state == "checking" || state == "moving" || state == "awaiting_confirm" ||
+         state == "measuring";
+}
+}  // namespace
+
+std::string RunController::start(const Plan& plan) {
+  std::lock_guard lock(impl_->mutex);
+  if (busy(impl_->state) || impl_->job) return "a run is in progress (" + impl_->state + ")";
+  if (!impl_->resumable_id.empty() && impl_->state != "done")
+    return "run " + impl_->resumable_id + " is " + impl_->state +
+           ": resume it or abort it before starting another";
+  impl_->job = Impl::Job{Impl::Job::kStart, plan, {}};
+  impl_->wake.notify_all();
+  return {};
+}
+
+std::string RunController::confirm(std::optional<int> shell) {
+  std::lock_guard lock(impl_->mutex);
+  if (impl_->prompt.is_null()) return "nothing to confirm: no prompt is pending";
+  if (shell && *shell != impl_->prompt_shell)
+    return "the pending prompt is for shell " + std::to_string(impl_->prompt_shell) + ", not " +
+           std::to_string(*shell);
+  ++impl_->confirms;
+  return {};
+}
+
+std::string RunController::pause(const std::string& reason) {
+  std::lock_guard lock(impl_->mutex);
+  if (!busy(impl_->state)) return "no run is in progress (" + impl_->state + ")";
+  impl_->stop_reason = reason.empty() ? "paused by the operator" : "paused: " + reason;
+  impl_->pause_requested = true;
+  return {};
+}
+
+std::string RunController::resume(const std::string& run_id) {
+  std::lock_guard lock(impl_->mutex);
+  if (busy(impl_->state) || impl_->job) return "a run is in progress (" + impl_->state + ")";
+  const std::string id = run_id.empty() ? impl_->resumable_id : run_id;
+  if (id.empty()) return "no paused or interrupted run to resume";
+  try {
+    const std::string status = impl_->store.open(id).state().value("status", "interrupted");
+    if (status == "done" || status == "aborted") return "run " + id + " is " + status;
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  impl_->job = Impl::Job{Impl::Job::kResume, {}, id};
+  impl_->wake.notify_all();
+  return {};
+}
+
+std::string RunController::abort(const std::string& reason) {
+  std::lock_guard lock(impl_->mutex);
+  impl_->stop_reason = reason.empty() ? "aborted by the operator" : "aborted: " + reason;
+  impl_->abort_requested = true;
+  if (!busy(impl_->state) && !impl_->resumable_id.empty()) {
+    // A paused or interrupted run: close it for good.
+    try {
+      RunDir dir = impl_->store.open(impl_->resumable_id);
+      dir.setState({{"status", "aborted"}, {"reason", impl_->stop_reason}});
+      dir.logEvent({{"event", "aborted"}, {"reason", impl_->stop_reason}});
+    } catch (const std::exception& e) {
+      return e.what();
+    }
+    impl_->resumable_id.clear();
+    impl_->state = "aborted";
+    impl_->abort_requested = false;
+  }
+  return {};
+}
+
+nlohmann::json RunController::status() const {
+  return impl_->statusObject();
+}
+
+nlohmann::json RunController::result() const {
+  std::lock_guard lock(impl_->mutex);
+  if (impl_->last_result.is_null())
+    return {{"class", "RESULT"}, {"available", false}, {"message", "no fit yet"}};
+  return impl_->last_result;
+}
+
+nlohmann::json RunController::runs() const {
+  json list = json::array();
+  for (const std::string& id : impl_->store.ids()) {
+    const json st = impl_->store.open(id).state();
+    list.push_back(
+        {{"run", id}, {"status", st.value("status", "?")}, {"reason", st.value("reason", "")}});
+  }
+  return {{"class", "RUNS"}, {"runs", list}};
+}
+
+}  // namespace robocal::daemon

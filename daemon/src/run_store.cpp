@@ -1,0 +1,157 @@
+#include <robocal/daemon/run_store.hpp>
+
+#include <robocal/formats/error.hpp>
+#include <robocal/formats/samples_csv.hpp>
+
+#include <fcntl.h>
+#include <unistd.h>
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cstring>
+#include <ctime>
+#include <filesystem>
+
+namespace robocal::daemon {
+namespace {
+
+namespace fs = std::filesystem;
+constexpr const char* kSamplesFile = "samples.csv";
+constexpr const char* kEventsFile = "events.jsonl";
+constexpr const char* kStateFile = "state.json";
+
+std::string isoNow() {
+  const auto now = std::chrono::system_clock::now();
+  const std::time_t t = std::chrono::system_clock::to_time_t(now);
+  const long ms =
+      std::chrono::duration_cast<std::chrono::milliseconds>(now.time_since_epoch()).count() % 1000;
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[64];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%S", &tm);
+  return std::string(buf) + "." + (ms < 100 ? (ms < 10 ? "00" : "0") : "") + std::to_string(ms) +
+         "Z";
+}
+
+// Appends text with one write and fsyncs; a crash leaves at most a torn last line.
+void appendDurably(const std::string& path, const std::string& text) {
+  const int fd = ::open(path.c_str(), O_WRONLY | O_APPEND | O_CREAT | O_CLOEXEC, 0644);
+  if (fd < 0) throw FormatError(path + ": cannot open for appending: " + std::strerror(errno));
+  size_t done = 0;
+  while (done < text.size()) {
+    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) {
+      const int err = errno;
+      ::close(fd);
+      throw FormatError(path + ": write failed: " + std::strerror(err));
+    }
+    done += static_cast<size_t>(n);
+  }
+  const bool synced = ::fsync(fd) == 0;
+  ::close(fd);
+  if (!synced) throw FormatError(path + ": cannot flush to disk: " + std::strerror(errno));
+}
+
+void syncDir(const std::string& dir) {
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd >= 0) {
+    ::fsync(fd);
+    ::close(fd);
+  }
+}
+
+}  // namespace
+
+RunDir::RunDir(std::string path) : path_(std::move(path)) {}
+
+std::string RunDir::id() const {
+  return fs::path(path_).filename().string();
+}
+
+void RunDir::appendSample(const Sample& s, double bar_spread_mm) {
+  char spread[32];
+  std::snprintf(spread, sizeof spread, ",%.4f\n", bar_spread_mm);
+  appendDurably(file(kSamplesFile), formatSampleRow(s) + spread);
+}
+
+std::vector<Sample> RunDir::loadSamples() {
+  const std::string path = file(kSamplesFile);
+  std::string text = readTextFile(path);
+  if (!text.empty() && text.back() != '\n') {
+    const size_t keep = text.rfind('\n') + 1;  // npos + 1 == 0: nothing whole
+    logEvent({{"event", "torn_row_removed"}, {"bytes", text.size() - keep}});
+    fs::resize_file(path, keep);
+    text.resize(keep);
+  }
+  return parseSamples(text, path);
+}
+
+void RunDir::logEvent(nlohmann::json event) {
+  nlohmann::json line = {{"time", isoNow()}};
+  line.update(event);
+  appendDurably(file(kEventsFile),
+                line.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
+}
+
+nlohmann::json RunDir::state() const {
+  try {
+    return nlohmann::json::parse(readTextFile(file(kStateFile)));
+  } catch (const std::exception&) {
+    return {{"status", "interrupted"}};
+  }
+}
+
+void RunDir::setState(const nlohmann::json& state) {
+  writeJson(kStateFile, state);
+}
+
+void RunDir::writeJson(const std::string& name, const nlohmann::json& value) const {
+  writeTextFileAtomic(file(name), value.dump(1) + "\n");
+}
+
+RunStore::RunStore(std::string data_dir) : runs_dir_(data_dir + "/runs") {
+  std::error_code ec;
+  fs::create_directories(runs_dir_, ec);
+  if (ec) throw FormatError(runs_dir_ + ": cannot create: " + ec.message());
+}
+
+RunDir RunStore::create(const std::string& plan_text) {
+  std::string id = isoNow().substr(0, 19);
+  std::replace(id.begin(), id.end(), ':', '-');
+  std::string path = runs_dir_ + "/" + id;
+  for (int n = 2; fs::exists(path); ++n) path = runs_dir_ + "/" + id + "-" + std::to_string(n);
+  fs::create_directories(path);
+  RunDir run(path);
+  writeTextFileAtomic(run.file("plan.json"), plan_text);
+  writeTextFileAtomic(run.file(kSamplesFile), std::string(kSamplesHeader) + ",bar_spread_mm\n");
+  run.setState({{"status", "running"}});
+  syncDir(runs_dir_);
+  return run;
+}
+
+std::vector<std::string> RunStore::ids() const {
+  std::vector<std::string> out;
+  for (const auto& entry : fs::directory_iterator(runs_dir_))
+    if (entry.is_directory()) out.push_back(entry.path().filename().string());
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+RunDir RunStore::open(const std::string& id) const {
+  if (id.empty() || id.find('/') != std::string::npos || id.find("..") != std::string::npos ||
+      !fs::is_directory(runs_dir_ + "/" + id))
+    throw FormatError("no run '" + id + "'");
+  return RunDir(runs_dir_ + "/" + id);
+}
+
+std::optional<std::string> RunStore::latestUnfinished() const {
+  const auto all = ids();
+  for (auto it = all.rbegin(); it != all.rend(); ++it) {
+    const std::string status = open(*it).state().value("status", "interrupted");
+    if (status != "done" && status != "aborted") return *it;
+  }
+  return std::nullopt;
+}
+
+}  // namespace robocal::daemon

@@ -1,0 +1,70 @@
+// robocald's client protocol (docs/protocol.md): newline-delimited JSON objects over TCP, in the
+// manner of gpsd. The server greets with a VERSION object; every server object has a "class";
+// every request has a "cmd". This module knows only the wire format: parsing and validating
+// requests, and building the server's objects. No sockets.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+
+namespace robocal::proto {
+
+inline constexpr int kProtoMajor = 1;
+inline constexpr int kProtoMinor = 0;
+inline constexpr std::size_t kDefaultMaxLineBytes = 16 * 1024;
+
+enum class Cmd {
+  kStatus,
+  kWatch,
+  kPlan,
+  kStart,
+  kConfirm,
+  kPause,
+  kResume,
+  kAbort,
+  kResult,
+  kRuns
+};
+const char* cmdName(Cmd cmd);
+
+// A request that cannot be served as sent. The message says what is wrong and where.
+class RequestError : public std::runtime_error {
+ public:
+  RequestError(const std::string& what, std::string cmd = {})
+      : std::runtime_error(what), cmd_(std::move(cmd)) {}
+  const std::string& cmd() const { return cmd_; }
+
+ private:
+  std::string cmd_;
+};
+
+struct Request {
+  Cmd cmd = Cmd::kStatus;
+  std::string token;  // "" when not given
+  // Command fields (validated by parseRequest):
+  bool watch_enable = true;  // watch
+  std::string plan_path;     // plan (a plan file to load) and start (optional)
+  std::string cell_path;     // plan: plan from this cell file instead of the configured one
+  std::optional<int> shell;  // confirm: the shell the operator confirms (must match)
+  std::string run_id;        // resume: an interrupted run to continue (default: the latest)
+  std::string reason;        // pause / abort: the operator's words, for the log
+};
+
+// Parses one line (without its newline). RequestError on malformed JSON, a non-object, a missing
+// or unknown cmd, or a field of the wrong type.
+Request parseRequest(std::string_view line);
+
+// Commands that move the robot or change the run need the token.
+bool needsToken(Cmd cmd);
+
+// Server objects. frame() turns one into a wire line (compact JSON and '\n').
+std::string frame(const nlohmann::json& object);
+nlohmann::json versionObject(const std::string& release);
+nlohmann::json errorObject(const std::string& message, const std::string& cmd = {});
+nlohmann::json ackObject(Cmd cmd, const std::string& message = {});
+
+}  // namespace robocal::proto
