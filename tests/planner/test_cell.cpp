@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 
 #include <robocal/planner/cell_json.hpp>
+#include <robocal/sim/measurements.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -23,7 +24,7 @@ std::string errorOf(const std::string& text) {
 
 TEST_CASE("the shipped cell file reads and has the documented defaults") {
   const CellConfig c = loadCellFile(std::string(ROBOCAL_SOURCE_DIR) + "/config/cell.json");
-  CHECK(c.bar.nominal_length_mm == 100);
+  CHECK(c.bar.nominal_length_mm == kDefaultBarMm);  // the bar robocal simulate assumes
   CHECK(c.bar.extension_lengths_mm == std::vector<double>{0, 150});
   CHECK(c.bar.max_deflection_mm == 2.0);
   CHECK(c.connections.size() == 9);

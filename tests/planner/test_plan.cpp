@@ -88,7 +88,7 @@ TEST_CASE("the default cell plans nine shells per extension, each with at least 
   for (const ShellPlan& s : plan.shells) {
     INFO("shell " << s.shell << " " << connectionName(s.connection));
     CHECK(s.summary.points >= 80);
-    CHECK(s.radius_mm == Approx(100.0 + s.extension_mm));
+    CHECK(s.radius_mm == Approx(defaultCell().bar.nominal_length_mm + s.extension_mm));
     CHECK(s.summary.max_deviation_mm <= defaultCell().motion.via_tolerance_mm);
     CHECK(s.summary.duration_s > s.summary.points * defaultCell().motion.settle_s);
     // Every grid point is either planned or listed as dropped, with a reason.
@@ -235,10 +235,10 @@ TEST_CASE("singularity margins reject poses near a singularity") {
   const Connection c{0, 0};
   // A planned pose, then the same with joint 5 turned close to zero.
   const PlanStep& step = defaultPlan().shells[0].steps[0];
-  CHECK(planner.poseProblem(c, 100, step.joints_deg, 0.5).empty());
+  CHECK(planner.poseProblem(c, defaultPlan().shells[0].radius_mm, step.joints_deg, 0.5).empty());
   JointsDeg q = step.joints_deg;
   q[4] = 3.0;
-  const std::string problem = planner.poseProblem(c, 100, q, 1e9);
+  const std::string problem = planner.poseProblem(c, defaultPlan().shells[0].radius_mm, q, 1e9);
   CHECK(problem.find("wrist") != std::string::npos);
 
   // A shoulder margin no pose can keep (the arm reaches less than 2 m): every point of the

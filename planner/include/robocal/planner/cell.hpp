@@ -11,7 +11,7 @@
 namespace robocal {
 
 struct BarSettings {
-  double nominal_length_mm = 100;  // ball centre to chuck centre at zero deflection
+  double nominal_length_mm = 150;  // ball centre to chuck centre at zero deflection
   std::vector<double> extension_lengths_mm = {0, 150};  // one set of shells per extension
   double max_deflection_mm = 2.0;                       // the LVDT reads +/- this much
 };
