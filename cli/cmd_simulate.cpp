@@ -4,6 +4,7 @@
 #include <robocal/formats/model_json.hpp>
 #include <robocal/formats/samples_csv.hpp>
 #include <robocal/kinematics/kinematics.hpp>
+#include <robocal/planner/plan_json.hpp>
 #include <robocal/sim/measurements.hpp>
 
 #include <cstdio>
@@ -30,6 +31,9 @@ perturbed (or a given truth), poses on each connection's shell found with the no
   --sigma-link-angle-deg S  truth perturbation of link rz, ry, rx               [0.02]
   --sigma-offset-deg S      truth perturbation of joint offsets                 [0.05]
   --sigma-gain S            truth perturbation of joint gains                   [0.0005]
+  --plan FILE               sample at this plan's data points (robocal plan) instead of the
+                            simulator's own shells; excludes --connections, --bar-mm,
+                            --extension-mm, --points-per-shell and --first-shell
   --out FILE                samples CSV to write                                [samples.csv]
   --truth-out FILE          write the true model (model format)
 )";
@@ -38,7 +42,8 @@ int run(const std::vector<std::string>& argv) {
   const Args args(argv,
                   {"model", "truth", "seed", "noise-mm", "quantum-deg", "connections", "bar-mm",
                    "extension-mm", "points-per-shell", "first-shell", "sigma-translation-mm",
-                   "sigma-link-angle-deg", "sigma-offset-deg", "sigma-gain", "out", "truth-out"},
+                   "sigma-link-angle-deg", "sigma-offset-deg", "sigma-gain", "out", "truth-out",
+                   "plan"},
                   {"help"});
   if (args.flag("help")) {
     std::fputs(kHelp, stdout);
@@ -71,14 +76,39 @@ int run(const std::vector<std::string>& argv) {
   int shell = static_cast<int>(args.integer("first-shell", 1));
   const Kinematics nominal_kin(nominal), true_kin(truth);
   double worst_offset_mm = 0;
-  for (const Connection& c : parseConnections(args.get("connections", "all"))) {
-    ShellRequest req;
-    req.connection = c;
-    req.radius_mm = bar_mm + extension_mm;
-    req.extension_mm = extension_mm;
-    req.points = static_cast<int>(points);
-    req.shell = shell++;
-    const ShellPoses poses = shellPoses(nominal, req, pose_rng);
+  // The shells: the plan's, or the simulator's own grid on each connection.
+  std::vector<std::pair<ShellRequest, ShellPoses>> shells;
+  if (args.has("plan")) {
+    for (const char* option :
+         {"connections", "bar-mm", "extension-mm", "points-per-shell", "first-shell"})
+      if (args.has(option)) throw UsageError(std::string("--plan excludes --") + option);
+    for (const ShellPlan& s : loadPlanFile(args.get("plan", "")).shells) {
+      ShellRequest req;
+      req.connection = s.connection;
+      req.radius_mm = s.radius_mm;
+      req.extension_mm = s.extension_mm;
+      req.shell = s.shell;
+      ShellPoses poses;
+      for (const PlanStep& step : s.steps)
+        if (step.kind == StepKind::kPoint)
+          poses.poses.push_back({step.lat_deg, step.lon_deg, step.joints_deg});
+      poses.dropped = static_cast<int>(s.dropped.size());
+      req.points = static_cast<int>(poses.poses.size());
+      shells.emplace_back(req, std::move(poses));
+    }
+  } else {
+    for (const Connection& c : parseConnections(args.get("connections", "all"))) {
+      ShellRequest req;
+      req.connection = c;
+      req.radius_mm = bar_mm + extension_mm;
+      req.extension_mm = extension_mm;
+      req.points = static_cast<int>(points);
+      req.shell = shell++;
+      shells.emplace_back(req, shellPoses(nominal, req, pose_rng));
+    }
+  }
+  for (const auto& [req, poses] : shells) {
+    const Connection& c = req.connection;
     auto shell_samples = measureShell(truth, req, poses.poses, noise, noise_rng);
     for (const ShellPose& p : poses.poses) {
       const Eigen::Vector3d& ball = nominal.balls_mm[c.ball_index];

@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 
 #include <robocal/formats/model_json.hpp>
+#include <robocal/formats/samples_csv.hpp>
 #include <robocal/kinematics/puma560.hpp>
 #include <robocal/planner/cell_json.hpp>
 #include <robocal/planner/check.hpp>
@@ -377,4 +378,37 @@ TEST_CASE("the deflection forecast grows with the model uncertainty") {
   CHECK(low > plan.summary.max_deviation_mm);
   CHECK(high > low);
   for (const ShellPlan& s : plan.shells) CHECK(s.summary.predicted_deflection_mm > 0);
+}
+
+TEST_CASE("robocal simulate --plan samples at the plan's data points") {
+  CellConfig cell = defaultCell();
+  cell.connections = {Connection{0, 1}, Connection{2, 0}};
+  cell.bar.extension_lengths_mm = {0};
+  const Plan plan = planCell(nominal(), cell);
+  const std::string plan_path = tempPath("sim_plan.json");
+  const std::string csv_path = tempPath("sim_samples.csv");
+  savePlanFile(plan_path, plan);
+  std::string out;
+  const int status =
+      runCommand(robocalBinary() + " simulate --model " + kSource + "/config/puma560.json --plan " +
+                     plan_path + " --out " + csv_path + " --noise-mm 0",
+                 out);
+  INFO(out);
+  REQUIRE(status == 0);
+  const std::vector<Sample> samples = loadSamplesFile(csv_path);
+  const std::vector<Sample> expected = planSamples(nominal(), plan);
+  REQUIRE(samples.size() == expected.size());
+  for (size_t i = 0; i < samples.size(); ++i) {
+    CHECK(samples[i].shell == expected[i].shell);
+    CHECK(samples[i].ball_index == expected[i].ball_index);
+    CHECK(samples[i].chuck_index == expected[i].chuck_index);
+    CHECK(samples[i].lat_deg == Approx(expected[i].lat_deg).margin(1e-3));
+    CHECK((samples[i].joints_deg - expected[i].joints_deg).cwiseAbs().maxCoeff() < 1e-5);
+    // The perturbed robot: near the shell, not on it.
+    CHECK(std::abs(samples[i].length_mm - 150.0) < 10.0);
+  }
+  // Options that would contradict the plan are refused.
+  CHECK(runCommand(robocalBinary() + " simulate --model " + kSource +
+                       "/config/puma560.json --plan " + plan_path + " --bar-mm 100",
+                   out) != 0);
 }
