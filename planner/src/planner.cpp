@@ -323,6 +323,15 @@ bool ShellPlanner::planArc(const Connection& c, double radius, const ArmConfig& 
     pose.translation() = model().chucks_mm[c.chuck_index] + radius * mid.n -
                          pose.linear() * model().balls_mm[c.ball_index];
     const IkSolution s = ik_.solve(pose, config, &a.q);
+    // A via far from both ends in joint space means a joint took another turn (a limit was in
+    // the way): the moves either side would swing the bar about.
+    const double span = (b.q - a.q).cwiseAbs().maxCoeff();
+    if (s.ok() && (s.joints_deg - 0.5 * (a.q + b.q)).cwiseAbs().maxCoeff() > 0.5 * span + 45.0) {
+      if (r == 0)
+        why = fmt("via at lat %.1f lon %.1f deg: a joint would turn the long way", mid.lat_deg,
+                  mid.lon_deg);
+      continue;
+    }
     const std::string problem =
         s.ok() ? poseProblem(c, radius, s.joints_deg, cell_.motion.via_tolerance_mm)
                : std::string(ikStatusName(s.status));
