@@ -7,6 +7,7 @@
 #include <robocal/planner/plan_json.hpp>
 
 #include <cstdio>
+#include <nlohmann/json.hpp>
 
 namespace robocal::cli {
 namespace {
@@ -35,6 +36,9 @@ int run(const std::vector<std::string>& argv) {
   const std::string path = args.positional()[0];
   const Plan plan = loadPlanFile(path);
 
+  if (cellToJson(plan.cell) != cellToJson(cell))
+    std::printf("note: %s was made with other settings than %s; checking against the latter\n",
+                path.c_str(), args.required("cell").c_str());
   std::vector<PlanViolation> violations;
   try {
     violations = checkPlan(model, cell, plan);

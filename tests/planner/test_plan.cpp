@@ -287,6 +287,15 @@ TEST_CASE(
     CHECK(s.summary.points + static_cast<int>(s.dropped.size()) == 96);
     CHECK(checkPlan(nominal(), cell, p).empty());
   }
+  SECTION("impossible margins name the key") {
+    cell.margins.joint_limit_deg = 200;
+    try {
+      planCell(nominal(), cell);
+      FAIL("accepted a joint-limit margin larger than the joints' ranges");
+    } catch (const PlanError& e) {
+      CHECK(std::string(e.what()).find("margins.joint_limit_deg") != std::string::npos);
+    }
+  }
   SECTION("bad settings name the key") {
     cell.motion.via_tolerance_mm = 3.0;  // more than the bar's range
     try {
