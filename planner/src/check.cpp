@@ -27,7 +27,8 @@ std::string ruleOf(const std::string& problem) {
 
 std::string describeViolation(const PlanViolation& v) {
   std::string where = v.shell == 0 ? std::string("plan") : "shell " + std::to_string(v.shell);
-  if (v.shell != 0) where += v.step < 0 ? " connect pose" : " step " + std::to_string(v.step);
+  if (v.shell != 0 && v.step == kConnectStep) where += " connect pose";
+  if (v.shell != 0 && v.step >= 0) where += " step " + std::to_string(v.step);
   return where + " (" + v.rule + "): " + v.message;
 }
 
@@ -36,7 +37,7 @@ std::vector<PlanViolation> checkPlan(const Model& model, const CellConfig& cell,
   const PumaIk& ik = planner.ik();
   const double tol = cell.motion.via_tolerance_mm;
   std::vector<PlanViolation> out;
-  if (plan.shells.empty()) out.push_back({0, -1, "empty", "the plan has no shells"});
+  if (plan.shells.empty()) out.push_back({0, kShellStep, "empty", "the plan has no shells"});
 
   for (const ShellPlan& shell : plan.shells) {
     auto add = [&](int step, std::string rule, std::string message) {
@@ -45,23 +46,28 @@ std::vector<PlanViolation> checkPlan(const Model& model, const CellConfig& cell,
     const Connection c = shell.connection;
     if (c.ball_index < 0 || c.ball_index >= kBallCount || c.chuck_index < 0 ||
         c.chuck_index >= kChuckCount) {
-      add(-1, "connection", "no such ball or chuck");
+      add(kShellStep, "connection", "no such ball or chuck");
       continue;
     }
     bool known_extension = false;
     for (double e : cell.bar.extension_lengths_mm)
       known_extension |= std::abs(e - shell.extension_mm) < 1e-6;
-    if (!known_extension)
-      add(-1, "extension",
-          "extension " + std::to_string(shell.extension_mm) + " mm is not one of the cell's");
+    char text[200];
+    if (!known_extension) {
+      std::snprintf(text, sizeof text, "extension %.3f mm is not one of the cell's",
+                    shell.extension_mm);
+      add(kShellStep, "extension", text);
+    }
     const double radius = cell.bar.nominal_length_mm + shell.extension_mm;
-    if (std::abs(shell.radius_mm - radius) > 1e-6)
-      add(-1, "radius",
-          "radius " + std::to_string(shell.radius_mm) +
-              " mm is not bar nominal length + extension = " + std::to_string(radius) + " mm");
+    if (std::abs(shell.radius_mm - radius) > 1e-6) {
+      std::snprintf(text, sizeof text,
+                    "radius %.3f mm is not the bar's nominal length + extension = %.3f mm",
+                    shell.radius_mm, radius);
+      add(kShellStep, "radius", text);
+    }
     int points = 0;
     for (const PlanStep& s : shell.steps) points += s.kind == StepKind::kPoint;
-    if (points == 0) add(-1, "empty", "the shell has no data points");
+    if (points == 0) add(kShellStep, "empty", "the shell has no data points");
 
     auto checkPose = [&](int index, const PlanStep& step) {
       const std::string problem = planner.poseProblem(c, radius, step.joints_deg, tol);
@@ -91,7 +97,7 @@ std::vector<PlanViolation> checkPlan(const Model& model, const CellConfig& cell,
       return true;
     };
 
-    bool prev_ok = checkPose(-1, shell.connect);
+    bool prev_ok = checkPose(kConnectStep, shell.connect);
     const PlanStep* prev = &shell.connect;
     for (size_t i = 0; i < shell.steps.size(); ++i) {
       const PlanStep& step = shell.steps[i];

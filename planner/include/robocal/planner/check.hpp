@@ -10,11 +10,14 @@
 
 namespace robocal {
 
+inline constexpr int kConnectStep = -1;  // PlanViolation::step of the connect pose
+inline constexpr int kShellStep = -2;    // PlanViolation::step of the shell (or plan) as a whole
+
 struct PlanViolation {
-  int shell = 0;     // the shell's number as written in the plan (0 for the plan as a whole)
-  int step = -1;     // 0-based index into the shell's steps; -1 for the connect pose or the shell
-  std::string rule;  // short name: "limits", "deviation", "configuration", ...
-  std::string message;  // what is wrong, with numbers
+  int shell = 0;          // the shell's number as written in the plan (0 for the plan as a whole)
+  int step = kShellStep;  // 0-based index into the shell's steps, or kConnectStep, kShellStep
+  std::string rule;       // short name: "limits", "deviation", "configuration", ...
+  std::string message;    // what is wrong, with numbers
 };
 
 // Every rule the planner keeps, checked from the joints alone with `model`:
@@ -29,7 +32,8 @@ struct PlanViolation {
 // Throws PlanError when the model or the cell cannot be used at all.
 std::vector<PlanViolation> checkPlan(const Model& model, const CellConfig& cell, const Plan& plan);
 
-// "shell 3 step 17 (deviation): ..." / "shell 3 connect pose (limits): ...".
+// "shell 3 step 17 (deviation): ..." / "shell 3 connect pose (limits): ..." /
+// "shell 3 (radius): ...".
 std::string describeViolation(const PlanViolation& v);
 
 }  // namespace robocal
