@@ -92,6 +92,8 @@ void BarReader::handleLine(const std::string& line) {
   switch (parsed.kind) {
     case BarLineKind::kGarbage:
       ++stats_.garbage_lines;
+      stats_.last_garbage = line.substr(0, 80);
+      if (isPrintableText(line)) stats_.last_text_garbage = stats_.last_garbage;
       return;
     case BarLineKind::kReading:
       ++stats_.readings;

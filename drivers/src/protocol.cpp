@@ -66,6 +66,13 @@ bool isPrintableText(std::string_view text) {
   });
 }
 
+bool looksLikeText(std::string_view bytes) {
+  std::string without_endings;
+  for (char c : bytes)
+    if (c != '\r' && c != '\n') without_endings.push_back(c);
+  return isPrintableText(without_endings);
+}
+
 std::string escapeBytes(std::string_view bytes) {
   std::string out;
   for (char c : bytes) {

@@ -100,7 +100,7 @@ std::vector<std::string> ValController::command(const std::string& text, double 
       if (reply.raw().empty())
         what += ": is it powered on and at the monitor prompt '" + dialect_.config().prompt +
                 "', the cable a null-modem one, and the baud rate right?";
-      else if (!isPrintableText(reply.raw()))
+      else if (!looksLikeText(reply.raw()))
         what += ": it sent bytes that are not text (" + escapeBytes(reply.raw().substr(0, 40)) +
                 "): wrong baud rate or parity, or a garbling USB adapter";
       else

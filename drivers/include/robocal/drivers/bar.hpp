@@ -39,6 +39,8 @@ struct BarStats {
   long partial_lines = 0;  // fragments without a line ending, discarded
   long timeouts = 0;       // polls without an answer in poll_timeout_s
   long disconnects = 0;
+  std::string last_garbage;       // the last unrecognised line, for diagnostics
+  std::string last_text_garbage;  // the last unrecognised line that was readable text
 };
 
 class BarReader {

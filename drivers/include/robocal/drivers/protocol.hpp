@@ -41,6 +41,8 @@ std::string trim(std::string_view text);
 std::string toUpper(std::string_view text);
 // Printable ASCII and tabs only (a line with anything else was garbled on the wire).
 bool isPrintableText(std::string_view text);
+// Raw received bytes that are text: printable ASCII, tabs and line endings.
+bool looksLikeText(std::string_view bytes);
 // Readable form of raw bytes for messages and logs: \r, \n, \t, \xNN.
 std::string escapeBytes(std::string_view bytes);
 // Inverse of escapeBytes (also accepts \\): used for transcripts and line endings in configs.

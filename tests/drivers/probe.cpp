@@ -1,0 +1,104 @@
+// What `robocal probe` tells a technician, against robocal-cellsim over real ptys: the verdicts
+// of the diagnose functions, and the command itself.
+#include "cellsim_process.hpp"
+
+#include <robocal/drivers/diagnose.hpp>
+
+#include <catch2/catch.hpp>
+
+#include <sys/wait.h>
+
+#include <cstdio>
+
+using namespace robocal::drivers;
+using robocal::test::CellSimProcess;
+
+namespace {
+std::pair<int, std::string> runRobocal(const std::string& args) {
+  const std::string cmd = std::string(ROBOCAL_BINARY_DIR "/cli/robocal ") + args + " 2>&1";
+  FILE* p = ::popen(cmd.c_str(), "r");
+  REQUIRE(p);
+  std::string out;
+  char buf[512];
+  while (std::fgets(buf, sizeof buf, p)) out += buf;
+  const int status = ::pclose(p);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+}  // namespace
+
+TEST_CASE("Probe: verdicts in technician words", "[drivers][probe]") {
+  CellSimProcess sim({"--bar-garbage-every", "5"});
+  auto config = sim.driversConfig();
+  config.val.connect_timeout_s = 0.5;
+  config.bar.stale_after_s = 0.6;
+  config.bar.poll_timeout_s = 0.2;
+  boost::asio::io_context io;
+
+  SECTION("both answer") {
+    const Diagnosis v = diagnoseVal(io, config.val);
+    CHECK(v.verdict == Verdict::kOk);
+    REQUIRE(v.where);
+    CHECK(v.where->joints_deg[1] == Approx(45).margin(0.01));
+    int readings = 0;
+    const Diagnosis b = diagnoseBar(io, config.bar, 0.3, [&](const BarReading&) { ++readings; });
+    CHECK(b.verdict == Verdict::kOk);
+    CHECK(readings >= 1);
+  }
+  SECTION("no port") {
+    config.val.serial.path = sim.dir() + "/unplugged";
+    const Diagnosis v = diagnoseVal(io, config.val);
+    CHECK(v.verdict == Verdict::kNoPort);
+    CHECK_THAT(v.message, Catch::Contains("plugged in"));
+  }
+  SECTION("wrong baud on the controller") {
+    config.val.serial.baud = 19200;
+    const Diagnosis v = diagnoseVal(io, config.val);
+    CHECK(v.verdict == Verdict::kGarbled);
+    CHECK_THAT(v.message, Catch::Contains("baud"));
+  }
+  SECTION("wrong prompt") {
+    config.val.prompt = ">";
+    const Diagnosis v = diagnoseVal(io, config.val);
+    CHECK(v.verdict == Verdict::kUnparseable);
+    CHECK_THAT(v.message, Catch::Contains("val.prompt"));
+  }
+  SECTION("WHERE headers that do not fit") {
+    config.val.joint_headers = {"J1", "J2", "J3", "J4", "J5", "J6"};
+    const Diagnosis v = diagnoseVal(io, config.val);
+    CHECK(v.verdict == Verdict::kUnparseable);
+    CHECK_THAT(v.message, Catch::Contains("val.joint_headers"));
+  }
+  SECTION("a bar format that does not fit") {
+    config.bar.format = "gn";
+    const Diagnosis b = diagnoseBar(io, config.bar, 0.2);
+    CHECK(b.verdict == Verdict::kUnparseable);
+    CHECK_THAT(b.message, Catch::Contains("bar.format"));
+  }
+  SECTION("a silent bar reader") {
+    REQUIRE(sim.control("fault stall bar 5").rfind("ok", 0) == 0);
+    const Diagnosis b = diagnoseBar(io, config.bar, 0.2);
+    CHECK(b.verdict == Verdict::kNoAnswer);
+  }
+  SECTION("no probe") {
+    REQUIRE(sim.control("fault noprobe").rfind("ok", 0) == 0);
+    const Diagnosis b = diagnoseBar(io, config.bar, 0.2);
+    CHECK(b.verdict == Verdict::kDeviceError);
+    CHECK_THAT(b.message, Catch::Contains("LVDT cable"));
+  }
+}
+
+TEST_CASE("Probe: the robocal probe command", "[drivers][probe]") {
+  CellSimProcess sim;
+  const auto [ok_code, ok_out] =
+      runRobocal("probe --config " ROBOCAL_SOURCE_DIR "/config/drivers.json --val " +
+                 sim.valPath() + " --bar " + sim.barPath() + " --seconds 0.3");
+  INFO(ok_out);
+  CHECK(ok_code == 0);
+  CHECK_THAT(ok_out, Catch::Contains("joints (deg)"));
+  CHECK_THAT(ok_out, Catch::Contains(" mm "));
+
+  const auto [bad_code, bad_out] = runRobocal("probe --val " + sim.valPath() + " --val-baud 4800");
+  INFO(bad_out);
+  CHECK(bad_code == 1);
+  CHECK_THAT(bad_out, Catch::Contains("garbled"));
+}
