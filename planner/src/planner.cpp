@@ -455,11 +455,13 @@ ShellPlan ShellPlanner::planShell(const Connection& c, double extension_mm,
     JointsDeg q;
   };
   std::vector<Chosen> chosen;  // chosen[0] is the connect pose
+  bool found_connect = false;
   for (const Offset& off : offsets) {
     const Attempt a =
         attempt(cell_.connect_lat_deg, cell_.connect_lon_deg, off, shell.config, nullptr);
     if (a.problem.empty()) {
       chosen.push_back({cell_.connect_lat_deg, cell_.connect_lon_deg, off, a.ik.joints_deg});
+      found_connect = true;
       break;
     }
   }
@@ -534,10 +536,8 @@ ShellPlan ShellPlanner::planShell(const Connection& c, double extension_mm,
     finishShell(shell);
     return shell;
   }
-  const bool connect_is_grid =
-      chosen[0].lat == cell_.connect_lat_deg && chosen[0].lon == cell_.connect_lon_deg &&
-      !(chosen.size() > 1 && chosen[1].lat == chosen[0].lat && chosen[1].lon == chosen[0].lon);
-  if (!connect_is_grid) chosen.insert(chosen.begin(), chosen[0]);  // connect at the first point
+  // Without a safe pose at the connect place, the operator attaches the bar at the first point.
+  if (!found_connect) chosen.insert(chosen.begin(), chosen[0]);
 
   // Joints 4 and 6 turn continuously along the shell; shift the whole sequence by full turns so
   // that it sits inside the limits minus the margin.
