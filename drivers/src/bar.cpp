@@ -153,8 +153,11 @@ BarReading BarReader::read() {
       link_.write(dialect_.pollCommandBytes(), deadlineAfter(c.poll_timeout_s));
       attempt_deadline = std::min(stale_deadline, deadlineAfter(c.poll_timeout_s));
     }
-    runIoUntil(
-        io_, [&] { return sequence_ != start || disconnected_; }, attempt_deadline);
+    arm();  // a no-op while the receive loop runs
+    if (!runIoUntil(
+            io_, [&] { return sequence_ != start || disconnected_; }, attempt_deadline) &&
+        Clock::now() < attempt_deadline)
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));  // no work: do not spin
     if (sequence_ != start) return *latest_;
     if (disconnected_) throw not_connected();
     ++stats_.timeouts;
