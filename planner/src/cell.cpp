@@ -93,6 +93,7 @@ void validateCell(const CellConfig& c) {
   inRange("margins.wrist_singularity_deg", c.margins.wrist_singularity_deg, 0, 89);
   inRange("margins.elbow_singularity_deg", c.margins.elbow_singularity_deg, 0, 89);
   nonNegative("margins.shoulder_singularity_mm", c.margins.shoulder_singularity_mm);
+  nonNegative("margins.bar_clearance_mm", c.margins.bar_clearance_mm);
   if (!std::isfinite(c.margins.table_clearance_mm))
     bad("margins.table_clearance_mm", "not a finite number");
 

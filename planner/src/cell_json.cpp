@@ -139,7 +139,8 @@ CellConfig cellFromJson(const json& root, const std::string& source) {
                             {"wrist_singularity_deg", num(c.margins.wrist_singularity_deg)},
                             {"elbow_singularity_deg", num(c.margins.elbow_singularity_deg)},
                             {"shoulder_singularity_mm", num(c.margins.shoulder_singularity_mm)},
-                            {"table_clearance_mm", num(c.margins.table_clearance_mm)}});
+                            {"table_clearance_mm", num(c.margins.table_clearance_mm)},
+                            {"bar_clearance_mm", num(c.margins.bar_clearance_mm)}});
                 }},
                {"motion",
                 [&](const json& v, const std::string& k) {
@@ -211,7 +212,8 @@ nlohmann::ordered_json cellToJson(const CellConfig& c) {
                   {"wrist_singularity_deg", c.margins.wrist_singularity_deg},
                   {"elbow_singularity_deg", c.margins.elbow_singularity_deg},
                   {"shoulder_singularity_mm", c.margins.shoulder_singularity_mm},
-                  {"table_clearance_mm", c.margins.table_clearance_mm}};
+                  {"table_clearance_mm", c.margins.table_clearance_mm},
+                  {"bar_clearance_mm", c.margins.bar_clearance_mm}};
   j["motion"] = {{"joint_speed_deg_per_s", c.motion.joint_speed_deg_per_s},
                  {"move_overhead_s", c.motion.move_overhead_s},
                  {"settle_s", c.motion.settle_s},

@@ -18,6 +18,8 @@ std::string ruleOf(const std::string& problem) {
   if (problem.find("shoulder singularity") != std::string::npos) return "shoulder singularity";
   if (problem.rfind("bar ", 0) == 0 && problem.find("tool axis") != std::string::npos)
     return "bar-tool angle";
+  if (problem.rfind("flange", 0) == 0 && problem.find("from the bar") != std::string::npos)
+    return "bar clearance";
   if (problem.rfind("flange", 0) == 0) return "table clearance";
   if (problem.rfind("bar deviation", 0) == 0) return "deviation";
   return "joints";

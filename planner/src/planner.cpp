@@ -172,7 +172,14 @@ PoseReport ShellPlanner::inspect(const Connection& c, double radius, const Joint
   r.deviation_mm = bar.norm() - radius;
   const Eigen::Vector3d back = -pose.linear().col(2);
   r.bar_tool_angle_deg = std::acos(std::clamp(bar.normalized().dot(back), -1.0, 1.0)) * kDegPerRad;
-  r.min_height_mm = std::min(pose.translation().z(), (pose * tool_inv_).translation().z());
+  const Eigen::Vector3d wrist = (pose * tool_inv_).translation();
+  r.min_height_mm = std::min(pose.translation().z(), wrist.z());
+  // Distance of a point from the bar, the segment chuck -> ball.
+  auto fromBar = [&](const Eigen::Vector3d& p) {
+    const double t = std::clamp((p - chuck).dot(-bar) / bar.squaredNorm(), 0.0, 1.0);
+    return (p - (chuck - t * bar)).norm();
+  };
+  r.bar_clearance_mm = std::min(fromBar(pose.translation()), fromBar(wrist));
   r.singularity = ik_.singularityMargins(q);
   return r;
 }
@@ -206,6 +213,9 @@ std::string ShellPlanner::poseProblem(const Connection& c, double radius, const 
   if (r.bar_tool_angle_deg < cell_.tool.min_bar_tool_angle_deg)
     return fmt("bar %.1f deg from the tool axis (minimum %.1f deg)", r.bar_tool_angle_deg,
                cell_.tool.min_bar_tool_angle_deg);
+  if (r.bar_clearance_mm < m.bar_clearance_mm)
+    return fmt("flange or wrist centre %.1f mm from the bar (minimum %.1f mm)", r.bar_clearance_mm,
+               m.bar_clearance_mm);
   if (r.min_height_mm < m.table_clearance_mm)
     return fmt("flange or wrist centre %.1f mm above the table plane (minimum %.1f mm)",
                r.min_height_mm, m.table_clearance_mm);

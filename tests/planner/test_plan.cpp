@@ -421,3 +421,24 @@ TEST_CASE("robocal simulate --plan samples at the plan's data points") {
                        "/config/puma560.json --plan " + plan_path + " --bar-mm 100",
                    out) != 0);
 }
+
+TEST_CASE("the flange and the wrist centre keep their distance from the bar") {
+  const ShellPlan& shell = defaultPlan().shells[0];
+  const ShellPlanner planner(nominal(), defaultCell());
+  const PoseReport r =
+      planner.inspect(shell.connection, shell.radius_mm, shell.steps[0].joints_deg);
+  CHECK(r.bar_clearance_mm >= defaultCell().margins.bar_clearance_mm);
+  CellConfig cell = defaultCell();
+  cell.margins.bar_clearance_mm = r.bar_clearance_mm + 1.0;
+  const ShellPlanner strict(nominal(), cell);
+  const std::string problem =
+      strict.poseProblem(shell.connection, shell.radius_mm, shell.steps[0].joints_deg, 0.5);
+  CHECK(problem.find("from the bar") != std::string::npos);
+  // check-plan reports it under its own rule.
+  Plan plan;
+  plan.shells.push_back(shell);
+  bool found = false;
+  for (const PlanViolation& v : checkPlan(nominal(), cell, plan))
+    found |= v.step == 0 && v.rule == "bar clearance";
+  CHECK(found);
+}

@@ -42,6 +42,7 @@ struct SafetyMargins {
   double elbow_singularity_deg = 10;     // elbow bend from the straight arm
   double shoulder_singularity_mm = 100;  // wrist centre from joint 1's axis plane
   double table_clearance_mm = 30;        // flange and wrist centre above the chucks' plane z = 0
+  double bar_clearance_mm = 40;          // flange and wrist centre from the bar (chuck to ball)
 };
 
 struct MotionSettings {

@@ -77,6 +77,7 @@ struct PoseReport {
   double deviation_mm = 0;        // |ball - chuck| - radius, nominal model
   double bar_tool_angle_deg = 0;  // between the bar (ball to chuck) and the tool's backward axis
   double min_height_mm = 0;       // lowest of the flange and the wrist centre (z)
+  double bar_clearance_mm = 0;    // nearest of the flange and the wrist centre to the bar
   SingularityMargins singularity;
   Eigen::Vector3d ball_mm = Eigen::Vector3d::Zero();
 };
