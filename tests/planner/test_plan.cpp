@@ -9,6 +9,7 @@
 #include <robocal/planner/plan_json.hpp>
 #include <robocal/sim/measurements.hpp>
 
+#include <unistd.h>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -67,12 +68,23 @@ std::string robocalBinary() {
   return std::string(ROBOCAL_BINARY_DIR) + "/cli/robocal";
 }
 
+// A file name of this process (ctest runs test cases in parallel processes).
 std::string tempPath(const std::string& name) {
-  return std::string(ROBOCAL_BINARY_DIR) + "/test_planner_" + name;
+  return std::string(ROBOCAL_BINARY_DIR) + "/test_planner_" + std::to_string(::getpid()) + "_" +
+         name;
 }
+
+// Removes the listed files when it goes out of scope.
+struct TempFiles {
+  std::vector<std::string> paths;
+  ~TempFiles() {
+    for (const std::string& p : paths) std::remove(p.c_str());
+  }
+};
 
 int runCommand(const std::string& command, std::string& output) {
   const std::string out_path = tempPath("cmd_output.txt");
+  const TempFiles cleanup{{out_path}};
   const int status = std::system((command + " > " + out_path + " 2>&1").c_str());
   std::ifstream in(out_path);
   std::stringstream text;
@@ -217,6 +229,7 @@ TEST_CASE("robocal check-plan prints each violation with its step and exits non-
   nlohmann::json j = nlohmann::json::parse(formatPlan(defaultPlan()));
   const std::string good = tempPath("good_plan.json");
   const std::string bad = tempPath("bad_plan.json");
+  const TempFiles cleanup{{good, bad}};
   std::ofstream(good) << j.dump();
   j["shells"][4]["steps"][7]["joints_deg"][2] =
       j["shells"][4]["steps"][7]["joints_deg"][2].get<double>() + 3.0;
@@ -396,6 +409,7 @@ TEST_CASE("robocal simulate --plan samples at the plan's data points") {
   const Plan plan = planCell(nominal(), cell);
   const std::string plan_path = tempPath("sim_plan.json");
   const std::string csv_path = tempPath("sim_samples.csv");
+  const TempFiles cleanup{{plan_path, csv_path}};
   savePlanFile(plan_path, plan);
   std::string out;
   const int status =
