@@ -588,15 +588,11 @@ ShellPlan ShellPlanner::planShell(const Connection& c, double extension_mm,
       prev = nodeFor(c, radius, ch.lat, ch.lon, pose, s.joints_deg);
       continue;
     }
-    if (!problem.empty()) {
-      shell.dropped.push_back({ch.lat, ch.lon, "after turning joints 4 and 6: " + problem});
-      continue;
-    }
     Node node = nodeFor(c, radius, ch.lat, ch.lon, pose, s.joints_deg);
     std::vector<PlanStep> vias;
-    std::string why;
-    bool joined =
-        planArc(c, radius, shell.config, prev, node, 0, vias, shell.summary.max_deviation_mm, why);
+    std::string why = "after turning joints 4 and 6: " + problem;
+    bool joined = problem.empty() && planArc(c, radius, shell.config, prev, node, 0, vias,
+                                             shell.summary.max_deviation_mm, why);
     if (!joined) {
       // Other orientations at the point, nearest to the previous step's first.
       std::vector<std::pair<double, Offset>> others;
