@@ -69,6 +69,9 @@ void validateCell(const CellConfig& c) {
 
   inRange("grid.latitude_first_deg", c.grid.latitude_first_deg, 0, 90);
   inRange("grid.latitude_last_deg", c.grid.latitude_last_deg, 0, 90);
+  if (c.grid.latitude_last_deg > 90 - 1e-6)
+    bad("grid.latitude_last_deg",
+        "must be below 90: at the pole every longitude is the same point");
   if (c.grid.latitude_last_deg < c.grid.latitude_first_deg)
     bad("grid.latitude_last_deg", "is below grid.latitude_first_deg: the grid is empty");
   positive("grid.latitude_step_deg", c.grid.latitude_step_deg);

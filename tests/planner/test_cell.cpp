@@ -61,6 +61,8 @@ TEST_CASE("bad cell files give an error naming the key") {
             .find("margins.wrist_singularity_deg") != std::string::npos);
   CHECK(errorOf(R"({"motion": {"sample_step_mm": 5}})").find("motion.sample_step_mm") !=
         std::string::npos);
+  CHECK(errorOf(R"({"grid": {"latitude_last_deg": 90}})").find("grid.latitude_last_deg") !=
+        std::string::npos);
   CHECK(errorOf("{not json").find("not valid JSON") != std::string::npos);
   CHECK(errorOf("[]").find("top level") != std::string::npos);
 }
