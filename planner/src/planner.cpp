@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <exception>
+#include <functional>
 #include <mutex>
 #include <numbers>
 #include <thread>
@@ -164,8 +165,12 @@ Eigen::Isometry3d ShellPlanner::policyPose(const Connection& c, double radius, d
 }
 
 PoseReport ShellPlanner::inspect(const Connection& c, double radius, const JointsDeg& q) const {
+  return inspectPose(c, radius, q, ik_.kinematics().toolPose(q));
+}
+
+PoseReport ShellPlanner::inspectPose(const Connection& c, double radius, const JointsDeg& q,
+                                     const Eigen::Isometry3d& pose) const {
   PoseReport r;
-  const Eigen::Isometry3d pose = ik_.kinematics().toolPose(q);
   const Eigen::Vector3d chuck = model().chucks_mm[c.chuck_index];
   r.ball_mm = pose * model().balls_mm[c.ball_index];
   const Eigen::Vector3d bar = chuck - r.ball_mm;
@@ -193,6 +198,12 @@ std::string ShellPlanner::poseProblem(const Connection& c, double radius, const 
 std::string ShellPlanner::poseProblem(const Connection& c, double radius, const JointsDeg& q,
                                       double tolerance_mm, PoseReport& r) const {
   if (!q.allFinite()) return "joints are not finite numbers";
+  r = inspect(c, radius, q);
+  return problemOf(q, r, tolerance_mm);
+}
+
+std::string ShellPlanner::problemOf(const JointsDeg& q, const PoseReport& r,
+                                    double tolerance_mm) const {
   const SafetyMargins& m = cell_.margins;
   for (int j = 0; j < kJointCount; ++j) {
     const JointParams& jp = model().joints[j];
@@ -200,7 +211,6 @@ std::string ShellPlanner::poseProblem(const Connection& c, double radius, const 
       return fmt("joint %.0f at %.2f deg is not %.1f deg inside its limits", j + 1.0, q[j],
                  m.joint_limit_deg);
   }
-  r = inspect(c, radius, q);
   if (r.singularity.wrist_deg < m.wrist_singularity_deg)
     return fmt("wrist %.2f deg from singular (margin %.1f deg)", r.singularity.wrist_deg,
                m.wrist_singularity_deg);
@@ -224,35 +234,50 @@ std::string ShellPlanner::poseProblem(const Connection& c, double radius, const 
   return {};
 }
 
-std::vector<JointsDeg> ShellPlanner::segmentSamples(const Connection& c, const JointsDeg& a,
-                                                    const JointsDeg& b) const {
+bool ShellPlanner::walkSegment(
+    const Connection& c, const JointsDeg& a, const JointsDeg& b,
+    const std::function<bool(int, const JointsDeg&, const Eigen::Isometry3d&)>& visit,
+    double length) const {
   const Kinematics& kin = ik_.kinematics();
   const Eigen::Vector3d ball = model().balls_mm[c.ball_index];
   const double step = cell_.motion.sample_step_mm;
-  double length = 0;
   Eigen::Vector3d prev = kin.ballPosition(a, ball);
-  for (int i = 1; i <= kCoarseSamples; ++i) {
-    const Eigen::Vector3d p = kin.ballPosition(a + (b - a) * (double(i) / kCoarseSamples), ball);
-    length += (p - prev).norm();
-    prev = p;
+  // The ball's path length, from a few samples, sets the first try's sample count.
+  if (length < 0) {
+    length = 0;
+    for (int i = 1; i <= kCoarseSamples; ++i) {
+      const Eigen::Vector3d p = kin.ballPosition(a + (b - a) * (double(i) / kCoarseSamples), ball);
+      length += (p - prev).norm();
+      prev = p;
+    }
   }
   int n = std::max(1, static_cast<int>(std::ceil(1.3 * length / step)));
-  std::vector<JointsDeg> out;
-  for (int attempt = 0; attempt < 8; ++attempt, n *= 2) {
-    out.clear();
-    out.reserve(n + 1);
+  for (int attempt = 0;; ++attempt, n *= 2) {
+    const bool last = attempt >= 8;  // 2^8 times the estimate: take what it gives
     bool spaced = true;
-    prev = kin.ballPosition(a, ball);
-    out.push_back(a);
-    for (int i = 1; i <= n && spaced; ++i) {
+    for (int i = 0; i <= n; ++i) {
       const JointsDeg q = a + (b - a) * (double(i) / n);
-      const Eigen::Vector3d p = kin.ballPosition(q, ball);
-      spaced = (p - prev).norm() <= step;
+      const Eigen::Isometry3d pose = kin.toolPose(q);
+      const Eigen::Vector3d p = pose * ball;
+      if (i > 0 && (p - prev).norm() > step && !last) {
+        spaced = false;
+        break;
+      }
       prev = p;
-      out.push_back(q);
+      if (!visit(i, q, pose)) return false;
     }
-    if (spaced) break;
+    if (spaced) return true;
   }
+}
+
+std::vector<JointsDeg> ShellPlanner::segmentSamples(const Connection& c, const JointsDeg& a,
+                                                    const JointsDeg& b) const {
+  std::vector<JointsDeg> out;
+  walkSegment(c, a, b, [&](int i, const JointsDeg& q, const Eigen::Isometry3d&) {
+    if (i == 0) out.clear();  // a finer try starts again
+    out.push_back(q);
+    return true;
+  });
   return out;
 }
 
@@ -260,25 +285,38 @@ bool ShellPlanner::segmentOk(const Connection& c, double radius, const JointsDeg
                              const JointsDeg& b, double tolerance_mm, double& worst,
                              std::string& why) const {
   worst = 0;
-  // A cheap look first: most failing segments fail at one of a few samples.
-  for (int i = 1; i < kCoarseSamples; ++i) {
+  // A cheap look first: most failing segments fail at one of a few samples, which also give
+  // the path's length for the dense walk.
+  const Kinematics& kin = ik_.kinematics();
+  const Eigen::Vector3d ball = model().balls_mm[c.ball_index];
+  double length = 0;
+  Eigen::Vector3d prev = kin.ballPosition(a, ball);
+  for (int i = 1; i <= kCoarseSamples; ++i) {
     const JointsDeg q = a + (b - a) * (double(i) / kCoarseSamples);
-    const std::string problem = poseProblem(c, radius, q, tolerance_mm);
+    const Eigen::Isometry3d pose = kin.toolPose(q);
+    const Eigen::Vector3d p = pose * ball;
+    length += (p - prev).norm();
+    prev = p;
+    if (i == kCoarseSamples) break;
+    const std::string problem = problemOf(q, inspectPose(c, radius, q, pose), tolerance_mm);
     if (!problem.empty()) {
       why = problem;
       return false;
     }
   }
-  PoseReport r;
-  for (const JointsDeg& q : segmentSamples(c, a, b)) {
-    const std::string problem = poseProblem(c, radius, q, tolerance_mm, r);
-    if (!problem.empty()) {
-      why = problem;
-      return false;
-    }
-    worst = std::max(worst, std::abs(r.deviation_mm));
-  }
-  return true;
+  return walkSegment(
+      c, a, b,
+      [&](int, const JointsDeg& q, const Eigen::Isometry3d& pose) {
+        const PoseReport r = inspectPose(c, radius, q, pose);
+        const std::string problem = problemOf(q, r, tolerance_mm);
+        if (!problem.empty()) {
+          why = problem;
+          return false;
+        }
+        worst = std::max(worst, std::abs(r.deviation_mm));
+        return true;
+      },
+      length);
 }
 
 ShellPlanner::Node ShellPlanner::nodeFor(const Connection& c, double radius, double lat_deg,

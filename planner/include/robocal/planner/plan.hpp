@@ -8,6 +8,7 @@
 #include <robocal/planner/cell.hpp>
 #include <robocal/planner/puma_ik.hpp>
 
+#include <functional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -127,6 +128,17 @@ class ShellPlanner {
   struct Node;
   std::string poseProblem(const Connection& c, double radius, const JointsDeg& q,
                           double tolerance_mm, PoseReport& report) const;
+  std::string problemOf(const JointsDeg& q, const PoseReport& report, double tolerance_mm) const;
+  PoseReport inspectPose(const Connection& c, double radius, const JointsDeg& q,
+                         const Eigen::Isometry3d& pose) const;
+  // Walks the joint-interpolated move a -> b so that the ball moves at most sample_step_mm
+  // between samples, calling visit(index, joints, tool pose) until it returns false (then
+  // returns false). A finer try restarts at index 0. `length` (mm), when known, is the ball's
+  // approximate path length.
+  bool walkSegment(
+      const Connection& c, const JointsDeg& a, const JointsDeg& b,
+      const std::function<bool(int, const JointsDeg&, const Eigen::Isometry3d&)>& visit,
+      double length = -1) const;
   bool planArc(const Connection& c, double radius, const ArmConfig& config, const Node& a,
                const Node& b, int depth, std::vector<PlanStep>& vias, double& worst,
                std::string& why) const;
