@@ -2,8 +2,12 @@
 // speed, abort. Owns prompt/echo/line-ending handling, per-command timeouts, motion completion
 // (poll WHERE until at the target and still) and typed controller errors.
 //
-// The calls are synchronous: each runs the io_context in the calling thread until the reply, the
-// deadline or an error. Do not call them from inside a handler of the same io_context.
+// The core is asynchronous on the io_context: a receive loop runs while connected (error lines
+// the controller prints on its own, such as an E-stop, are seen when they arrive), commands are
+// queued and each has its timer. The daemon uses the async* calls in its event loop. The
+// synchronous calls (tests, the command line) start the same operations and run the io_context in
+// the calling thread until they finish; do not call them from inside a handler of the same
+// io_context.
 #pragma once
 
 #include <robocal/drivers/config.hpp>
@@ -12,8 +16,13 @@
 #include <robocal/drivers/transport.hpp>
 
 #include <boost/asio/io_context.hpp>
+#include <boost/asio/steady_timer.hpp>
 
+#include <deque>
+#include <exception>
 #include <functional>
+#include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -27,9 +36,33 @@ struct ValStats {
   long where_polls = 0;        // WHEREs sent while waiting for motions
 };
 
+// Decides from successive WHERE replies whether a move has ended (pure; used by the driver).
+class MotionMonitor {
+ public:
+  enum class State { kMoving, kArrived, kStoppedShort, kTimedOut };
+  MotionMonitor(const ValConfig& config, const Joints6& target, Clock::time_point start);
+  State update(const Joints6& joints_deg, Clock::time_point now);
+  // Why the move failed, for kStoppedShort and kTimedOut.
+  std::string explain(State state, const Joints6& joints_deg) const;
+
+ private:
+  const ValConfig& config_;
+  Joints6 target_;
+  Clock::time_point deadline_, moving_since_;
+  std::optional<Joints6> previous_;
+  int still_ = 0;
+};
+
 class ValController {
  public:
+  using ReplyHandler = std::function<void(std::exception_ptr, std::vector<std::string>)>;
+  using WhereHandler = std::function<void(std::exception_ptr, WhereReply)>;
+  using ProgressHandler = std::function<void(const WhereReply&)>;
+
   ValController(boost::asio::io_context& io, ValConfig config);
+  ~ValController();
+  ValController(const ValController&) = delete;
+  ValController& operator=(const ValController&) = delete;
 
   // Opens the port and wakes the monitor (an empty line) until it shows its prompt. PortError
   // when the port cannot be opened, TimeoutError when nothing answers.
@@ -37,13 +70,12 @@ class ValController {
   // Re-opens the port (e.g. after a USB adapter was re-plugged) retrying for up to within_s.
   void reconnect(double within_s);
   void disconnect();
-  bool isConnected() const { return link_.isOpen(); }
+  bool isConnected() const { return link_.isOpen() && !disconnected_; }
 
   // One command and its reply lines (echo, prompt and empty lines removed). Controller error
   // lines are thrown as ControllerError (ArmPowerOffError, OutOfRangeError); TimeoutError when
   // the prompt does not come back within timeout_s; DisconnectedError when the port goes away.
   std::vector<std::string> command(const std::string& text, double timeout_s);
-
   WhereReply where();
   void setSpeed(double percent);
   void abort();
@@ -52,25 +84,57 @@ class ValController {
   // Polls WHERE until the joints are within at_target_tol_deg of the target and still;
   // MotionError on motion_timeout_s or when the arm stops short for stopped_short_s.
   // `progress` (optional) sees every WHERE.
-  WhereReply waitForMotion(const Joints6& target_deg,
-                           const std::function<void(const WhereReply&)>& progress = {});
+  WhereReply waitForMotion(const Joints6& target_deg, const ProgressHandler& progress = {});
   // startMove + waitForMotion.
-  WhereReply moveJoints(const Joints6& target_deg,
-                        const std::function<void(const WhereReply&)>& progress = {});
+  WhereReply moveJoints(const Joints6& target_deg, const ProgressHandler& progress = {});
+
+  // Asynchronous forms: the handler runs on the io_context with the error (nullptr on success)
+  // and the result. Commands are queued and sent one at a time.
+  void asyncCommand(const std::string& text, double timeout_s, ReplyHandler handler);
+  void asyncWhere(WhereHandler handler);
+  void asyncMoveJoints(const Joints6& target_deg, WhereHandler handler,
+                       ProgressHandler progress = {});
+  // Error lines the controller prints between commands (E-stop), as they arrive.
+  void onUnsolicitedError(std::function<void(const std::string&)> callback) {
+    unsolicited_callback_ = std::move(callback);
+  }
 
   const ValDialect& dialect() const { return dialect_; }
   SerialLink& link() { return link_; }
   const ValStats& stats() const { return stats_; }
 
  private:
-  void drainUnsolicited();
+  struct Exchange;
+  void arm();
+  void received(std::string_view bytes);
+  void unsolicited(std::string_view bytes);
+  void startNext();
+  void waitQuiet(std::uint64_t id);
+  void send();
+  void finish(std::exception_ptr error);
+  void lost(const std::string& why);
+  template <typename T>
+  T runSync(const std::function<void(std::function<void(std::exception_ptr, T)>)>& start,
+            double timeout_s);
+  void pollMotion(std::shared_ptr<MotionMonitor> monitor, Joints6 target, WhereHandler handler,
+                  ProgressHandler progress);
 
   boost::asio::io_context& io_;
   ValDialect dialect_;
   SerialLink link_;
+  boost::asio::steady_timer timer_, poll_timer_;
   ValStats stats_;
-  bool out_of_sync_ = false;
+  std::array<char, 1024> buffer_{};
+  std::shared_ptr<int> alive_;  // handlers hold a weak_ptr: they never outlive the controller
+  bool reading_ = false, disconnected_ = false, out_of_sync_ = false;
+  std::string disconnect_reason_;
+  Clock::time_point last_rx_{};
+  std::unique_ptr<Exchange> current_;
+  std::deque<std::unique_ptr<Exchange>> queue_;
+  std::uint64_t exchange_id_ = 0;
+  LineSplitter unsolicited_splitter_;
   std::vector<std::string> pending_errors_;
+  std::function<void(const std::string&)> unsolicited_callback_;
 };
 
 }  // namespace robocal::drivers
