@@ -263,6 +263,16 @@ class Cell {
     };
     try {
       if (w[0] == "status") return "ok " + status();
+      if (w[0] == "events") {
+        std::string out = "ok " + std::to_string(events_.size());
+        char buf[160];
+        for (const auto& e : events_) {
+          std::snprintf(buf, sizeof buf, " time_s=%.3f,connection=%s,deflection_mm=%+.3f", e.time_s,
+                        e.connection.c_str(), e.deflection_mm);
+          out += buf;
+        }
+        return out;
+      }
       if (w[0] == "quit") {
         io_.stop();
         return "ok bye";
@@ -317,7 +327,8 @@ class Cell {
     } catch (const std::exception& e) {
       return std::string("error: ") + e.what();
     }
-    return "error: unknown command (status, connect B1C1 [extension_mm=E] [bar_mm=L|here], estop, "
+    return "error: unknown command (status, events, connect B1C1 [extension_mm=E] [bar_mm=L|here], "
+           "estop, "
            "reset, fault ..., quit)";
   }
 
@@ -482,6 +493,7 @@ class Cell {
       return;
     }
     ++val_commands_;
+    if (o_.verbose) std::fprintf(stderr, "cellsim: val < %s\n", line.c_str());
     if (o_.val_disconnect_after > 0 && val_commands_ == o_.val_disconnect_after + 1) {
       disconnect(val_, o_.reconnect_after_s);
       return;

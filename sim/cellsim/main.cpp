@@ -15,7 +15,7 @@ constexpr const char* kHelp = R"(usage: robocal-cellsim --model TRUTH.json [opti
 
 A simulated robot cell on two pseudo-terminals: a VAL II controller and a ball-bar reader.
 Prints "val PATH", "bar PATH" (and "control PATH"), then "ready". Control commands, one per
-line on the control socket or stdin: status | connect B1C2 [extension_mm=E] [bar_mm=L|here] |
+line on the control socket or stdin: status | events | connect B1C2 [extension_mm=E] [bar_mm=L|here] |
 connect none | estop | reset | fault garbage|drop|noprobe [off]|error [TEXT] |
 fault stall val|bar S | fault disconnect val|bar S | quit
 
@@ -57,7 +57,7 @@ Faults (0 = off):
   --val-error-text TEXT                                          [Position out of range]
   --estop-on-move N          E-stop halfway through the Nth move
   --bar-no-probe             the reader reports NO PROBE
-  --verbose
+  --verbose                  log the controller's commands on stderr
 )";
 
 double number(const std::string& key, const std::string& v) {

@@ -68,6 +68,8 @@ TEST_CASE("Bar: over range is reported and the simulator records the break", "[d
   CHECK_THROWS_AS(bar.readValueMm(), BarStatusError);
   CHECK(bar.stats().over_range >= 2);
   CHECK(sim.status("broken_events") == "1");
+  CHECK_THAT(sim.control("events"), Catch::StartsWith("ok 1 time_s=") &&
+                                        Catch::Contains("connection=B1C1,deflection_mm=+"));
   // Back into range: readings again.
   val.moveJoints(kStart);
   CHECK(bar.read().kind == BarLineKind::kReading);
