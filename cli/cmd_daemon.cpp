@@ -307,3 +307,25 @@ const RegisterCommand r9({"runs", "robocald: the run history", runs});
 
 }  // namespace
 }  // namespace robocal::cli
+
+namespace robocal::cli {
+namespace {
+
+// robocal cellsim SOCKET COMMAND...: one control command to a running robocal-cellsim.
+int cellsim(const std::vector<std::string>& argv) {
+  if (argv.size() < 2 || argv[0] == "--help") {
+    std::printf(
+        "usage: robocal cellsim SOCKET COMMAND...\n  Sends a control command to "
+        "robocal-cellsim (status, connect B1C2 ..., fault ..., estop, quit).\n");
+    return argv.empty() || argv[0] != "--help" ? 2 : 0;
+  }
+  std::string command;
+  for (size_t i = 1; i < argv.size(); ++i) command += (i > 1 ? " " : "") + argv[i];
+  std::printf("%s\n", cellsimControl(argv[0], command).c_str());
+  return 0;
+}
+
+const RegisterCommand r10({"cellsim", "send a control command to robocal-cellsim", cellsim});
+
+}  // namespace
+}  // namespace robocal::cli

@@ -1,29 +1,75 @@
 #!/usr/bin/env bash
-# The README's main job: installs what is missing, builds, and runs a simulated calibration.
-# Output goes to out/ (or $ROBOCAL_OUT).
+# The README's main job: installs what is missing, builds, and runs a complete simulated
+# calibration the way a cell would run it: robocal-cellsim plays the robot and the ball-bar on
+# pseudo-terminals, robocald runs the two-set plan (nine shells, then nine with the 150 mm
+# extension), and a simulated operator answers the connection prompts. Output in out/.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 "$root/scripts/setup.sh"
 "$root/scripts/build.sh"
-bin=${ROBOCAL_BUILD_DIR:-$root/build}/cli/robocal
+build=${ROBOCAL_BUILD_DIR:-$root/build}
+bin=$build/cli/robocal
 out=${ROBOCAL_OUT:-$root/out}
-mkdir -p "$out"
 model=$root/config/puma560.json
+cell=${ROBOCAL_CELL:-$root/config/cell.json}
+rm -rf "$out"
+mkdir -p "$out"
+pids=()
+cleanup() { for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done; }
+trap cleanup EXIT
 
 echo "== identifiability of the nine connections (paper Table I)"
 "$bin" identify --model "$model" --connections all
 echo
-echo "== simulated measurements: nine shells with a perturbed true robot"
-"$bin" simulate --model "$model" --seed 7 --noise-mm 0.084 --connections all --extension-mm 0 \
-  --points-per-shell 90 --out "$out/samples.csv" --truth-out "$out/truth.json"
+echo "== a perturbed true robot (the simulate defaults: balls 1-2 mm off the nominal)"
+"$bin" simulate --model "$model" --seed 7 --connections B1C1 --points-per-shell 1 \
+  --out "$out/unused.csv" --truth-out "$out/truth.json" | tail -2
 echo
-echo "== validation shells with the 150 mm extension bar, same true robot"
-"$bin" simulate --model "$model" --truth "$out/truth.json" --seed 8 --noise-mm 0.084 \
-  --connections all --extension-mm 150 --points-per-shell 90 --first-shell 10 \
-  --out "$out/validation.csv"
+echo "== the off-line plan"
+"$bin" plan --model "$model" --cell "$cell" --out "$out/plan.json" | grep -E "^(plan|identification|forecast|planned)"
 echo
-echo "== identification: Levenberg-Marquardt from the nominal model, validated on the extension set"
-"$bin" solve --model "$model" "$out/samples.csv" --out "$out/calibrated.json" \
-  --validate "$out/validation.csv" --truth "$out/truth.json" --report "$out/report"
+echo "== robocal-cellsim (VAL II and ball-bar on pseudo-terminals) and robocald"
+"$build/sim/cellsim/robocal-cellsim" --model "$out/truth.json" --val-link "$out/val" \
+  --bar-link "$out/bar" --control "$out/cellsim.sock" --time-scale 100 --bar-mode streamed \
+  --stream-hz 100 --bar-mm 150 --range-mm 2.0 --noise-mm 0.06 --quantum-deg 0.005 \
+  >"$out/cellsim.log" 2>&1 &
+pids+=($!)
+for _ in $(seq 100); do grep -q ready "$out/cellsim.log" && break; sleep 0.1; done
+cat >"$out/robocald.json" <<JSON
+{
+  "listen_address": "127.0.0.1", "port": 0, "data_dir": "$out/data",
+  "model": "$model", "cell": "$cell", "plan": "$out/plan.json",
+  "settle_s": 0.03, "bar_window_s": 0.03, "bar_soft_limit_mm": 1.0, "bar_hard_limit_mm": 1.6,
+  "drivers": {
+    "val": {"serial": {"path": "$out/val"}, "poll_interval_s": 0.01},
+    "bar": {"serial": {"path": "$out/bar"}, "mode": "streamed"}
+  }
+}
+JSON
+"$build/daemon/robocald" --config "$out/robocald.json" >"$out/robocald.out" 2>"$out/robocald.log" &
+pids+=($!)
+for _ in $(seq 100); do grep -q listening "$out/robocald.out" && break; sleep 0.1; done
+port=$(awk '/listening/ {print $3}' "$out/robocald.out")
+export ROBOCAL_TOKEN_FILE=$out/data/token
+echo "robocald on 127.0.0.1:$port; cellsim control $out/cellsim.sock"
 echo
-echo "Done: calibrated model $out/calibrated.json, report $out/report/ (report.json and SVG figures)."
+echo "== the run (the simulated operator answers each prompt)"
+"$bin" watch --port "$port" --operator-cellsim "$out/cellsim.sock" --until done,paused,aborted,error \
+  --timeout-s 1500 | grep -v "simulated operator" &
+watch_pid=$!
+sleep 0.5
+"$bin" start --port "$port"
+wait "$watch_pid"
+echo
+echo "== the result"
+"$bin" result --port "$port" --json >"$out/result.json"
+samples_file=$(grep -o '"samples_file":"[^"]*"' "$out/result.json" | cut -d'"' -f4)
+run_dir=$(dirname "$samples_file")
+echo "simulated bar: $("$bin" cellsim "$out/cellsim.sock" status | grep -o 'broken_events=[0-9]*') (over-range events)"
+echo "re-centring moves: $(grep -c '"recentre"' "$run_dir/events.jsonl" || true), re-plans: $(grep -c '"replan"' "$run_dir/events.jsonl" || true)"
+echo
+echo "== the calibrated model against the simulated truth (all samples of the run, refitted)"
+"$bin" solve --model "$model" "$run_dir/samples.csv" --truth "$out/truth.json" \
+  --out "$out/calibrated.json" --report "$out/report"
+echo
+echo "Done. Run folder: $run_dir; calibrated model: $out/calibrated.json; report: $out/report/"

@@ -456,7 +456,11 @@ struct RunController::Impl {
     bool bar_maybe_attached = resuming;
     int replans = 0;
     std::optional<Model> refined;
-    if (config.centering && !samples.empty()) refined = refine(samples, plan);
+    std::size_t refined_at = 0;  // samples in the last refit
+    if (config.centering && !samples.empty()) {
+      refined = refine(samples, plan);
+      refined_at = samples.size();
+    }
 
     for (std::size_t si = 0; si < plan.shells.size(); ++si) {
       const ShellPlan& planned = plan.shells[si];
@@ -612,8 +616,12 @@ struct RunController::Impl {
                    {"dwell_s", dwell_s}},
                   false);
           updateProgress(static_cast<int>(samples.size()), total, started, done_at_start);
-          if (config.centering && next + 1 < shell.steps.size()) {
+          // Refit as the data grow by 5% (every sample at first): a fit costs milliseconds
+          // that grow with the samples, and a model from a few more samples changes little.
+          if (config.centering && next + 1 < shell.steps.size() &&
+              samples.size() >= refined_at + 1 + refined_at / 20) {
             refined = refine(samples, plan);
+            refined_at = samples.size();
             const ShellPlanner planner(*refined, cell_config);
             shell = planner.replanRemaining(shell, next + 1, actual);
             recordReplan(dir, replans, shell, next + 1, "refined model");

@@ -29,12 +29,11 @@ struct Client::Impl {
     io.restart();
     io.run_for(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
         std::chrono::duration<double>(timeout_s)));
-    if (!done) {
-      socket.cancel();
-      io.restart();
-      io.run();  // let the cancelled handler finish
-    }
-    return done;
+    if (done) return true;
+    socket.cancel();
+    io.restart();
+    io.run();  // let the cancelled handler finish; the operation still counts as timed out
+    return false;
   }
 };
 
@@ -98,8 +97,6 @@ std::optional<nlohmann::json> Client::read(double timeout_s) {
 
 nlohmann::json Client::request(const nlohmann::json& req, double timeout_s,
                                const std::string& want) {
-  static const std::set<std::string> streamed = {"BAR",    "PROGRESS", "STATE", "PROMPT",
-                                                 "SAMPLE", "EVENT",    "RESULT"};
   send(req);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
   while (true) {
@@ -110,7 +107,7 @@ nlohmann::json Client::request(const nlohmann::json& req, double timeout_s,
     auto reply = read(left);
     if (!reply) continue;
     const std::string cls = reply->value("class", "");
-    if (!want.empty() ? (cls == want || cls == "ERROR") : !streamed.count(cls)) return *reply;
+    if (want.empty() || cls == want || cls == "ERROR") return *reply;
   }
 }
 

@@ -29,9 +29,8 @@ class Client {
   void sendRaw(const std::string& bytes);  // for tests of malformed input
   // The next object from the server; nullopt on timeout. ClientError when the server closes.
   std::optional<nlohmann::json> read(double timeout_s);
-  // Sends a request and returns the first reply that is not part of a watch stream (BAR,
-  // PROGRESS, STATE, PROMPT, SAMPLE, EVENT, RESULT broadcasts are skipped unless `want` names
-  // the class to wait for).
+  // Sends a request and returns the reply: the next object, or with `want` the next object of
+  // that class or an ERROR (a watching client also receives the stream's objects).
   nlohmann::json request(const nlohmann::json& request, double timeout_s = 10.0,
                          const std::string& want = {});
 

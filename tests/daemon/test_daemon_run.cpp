@@ -1,0 +1,213 @@
+// Whole runs: robocal-cellsim (a perturbed true robot on ptys) + robocald + a client over TCP
+// acting as the operator. Crash and fault tests on the same set-up.
+#include <catch2/catch.hpp>
+
+#include "../cli/cli_helpers.hpp"
+#include "../drivers/cellsim_process.hpp"
+#include "daemon_process.hpp"
+
+#include <robocal/formats/model_json.hpp>
+#include <robocal/formats/samples_csv.hpp>
+#include <robocal/planner/plan_json.hpp>
+#include <robocal/solver/calibrate.hpp>
+
+#include <fstream>
+#include <random>
+#include <set>
+
+using namespace robocal;
+using namespace robocal::test;
+using json = nlohmann::json;
+using Catch::Matchers::Contains;
+
+namespace {
+
+struct Cell {
+  TempDir dir;
+  std::string truth_path;
+  std::unique_ptr<CellSimProcess> sim;
+  std::unique_ptr<DaemonProcess> daemon;
+
+  Cell(const std::vector<std::string>& connections, unsigned seed, bool centering = true) {
+    truth_path = dir / "truth.json";
+    const auto r = runRobocal("simulate --model " + kModel + " --seed " + std::to_string(seed) +
+                              " --connections B1C1 --points-per-shell 1 --out " + (dir / "x.csv") +
+                              " --truth-out " + truth_path);
+    REQUIRE(r.exit_code == 0);
+    sim = std::make_unique<CellSimProcess>(std::vector<std::string>{
+        "--model", truth_path, "--time-scale", "50", "--bar-mode", "streamed", "--stream-hz", "100",
+        "--bar-mm", "150", "--range-mm", "2.0", "--noise-mm", "0.03"});
+    std::ofstream(dir / "cell.json") << smallCell(connections, {0}).dump(1);
+    json drivers = drivers::toJson(sim->driversConfig());
+    drivers["bar"]["mode"] = "streamed";
+    drivers["val"]["poll_interval_s"] = 0.01;
+    daemon = std::make_unique<DaemonProcess>(json{{"model", kModel},
+                                                  {"cell", dir / "cell.json"},
+                                                  {"settle_s", 0.02},
+                                                  {"bar_window_s", 0.03},
+                                                  {"bar_soft_limit_mm", 1.0},
+                                                  {"bar_hard_limit_mm", 1.6},
+                                                  {"centering", centering},
+                                                  {"drivers", drivers}});
+    daemon->start();
+  }
+
+  // Acts as the operator until the run reaches one of `states` (returns it) or the time is up
+  // (returns ""). Every object read lands in `seen`.
+  std::string operate(proto::Client& c, const std::set<std::string>& states, double timeout_s,
+                      std::vector<json>* seen = nullptr) {
+    const auto deadline =
+        std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+    while (std::chrono::steady_clock::now() < deadline) {
+      auto o = c.read(0.2);
+      if (!o) continue;
+      if (seen && (*o)["class"] != "BAR") seen->push_back(*o);
+      const std::string cls = (*o)["class"];
+      if (cls == "PROMPT" && (*o)["shell"].get<int>() > 0) {
+        const std::string cmd = (*o)["action"] == "connect"
+                                    ? "connect B" + std::to_string((*o)["ball"].get<int>()) + "C" +
+                                          std::to_string((*o)["chuck"].get<int>()) +
+                                          " bar_mm=150 extension_mm=" +
+                                          std::to_string((*o)["extension_mm"].get<double>())
+                                    : "connect none";
+        REQUIRE_THAT(sim->control(cmd), Contains("ok"));
+        c.send({{"cmd", "confirm"}, {"shell", (*o)["shell"]}, {"token", daemon->token()}});
+      }
+      if (cls == "STATE" && states.count((*o)["to"])) return (*o)["to"];
+    }
+    return "";
+  }
+
+  std::string runDir(const std::string& id) const { return daemon->dataDir() + "/runs/" + id; }
+};
+
+std::set<std::tuple<int, long, long>> keys(const std::vector<Sample>& samples) {
+  std::set<std::tuple<int, long, long>> out;
+  for (const Sample& s : samples)
+    out.insert({s.shell, std::lround(s.lat_deg * 1000), std::lround(s.lon_deg * 1000)});
+  return out;
+}
+
+std::set<std::tuple<int, long, long>> plannedPoints(const Plan& plan) {
+  std::set<std::tuple<int, long, long>> out;
+  for (const auto& sh : plan.shells)
+    for (const auto& st : sh.steps)
+      if (st.kind == StepKind::kPoint)
+        out.insert({sh.shell, std::lround(st.lat_deg * 1000), std::lround(st.lon_deg * 1000)});
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("a full run to RESULT recovers the true robot", "[e2e]") {
+  Cell cell({"B1C1", "B1C2", "B2C2", "B2C3", "B3C3", "B3C1"}, 11);
+  auto c = cell.daemon->client();
+  c->send({{"cmd", "watch"}, {"enable", true}});
+  const json ack = c->request({{"cmd", "start"}, {"token", cell.daemon->token()}}, 30, "ACK");
+  REQUIRE(ack["class"] == "ACK");
+  std::vector<json> seen;
+  REQUIRE(cell.operate(*c, {"done", "paused", "error", "aborted"}, 240, &seen) == "done");
+
+  const json result = c->request({{"cmd", "result"}}, 10, "RESULT");
+  CHECK(result["rank"] == 36);
+  CHECK(result["rms_before_mm"].get<double>() > 0.2);
+  CHECK(result["rms_mm"].get<double>() < 0.05);
+  // The bar never left its range (cellsim counts it), and the daemon said what it did.
+  CHECK(cell.sim->status("broken_events") == "0");
+  int samples_seen = 0, prompts = 0;
+  for (const json& o : seen) {
+    samples_seen += o["class"] == "SAMPLE";
+    prompts += o["class"] == "PROMPT";
+  }
+  const auto samples = loadSamplesFile(result["samples_file"].get<std::string>());
+  CHECK(static_cast<int>(samples.size()) == samples_seen);
+  CHECK(prompts >= 12);  // connect and detach for each of the six shells
+  // Against the truth, at poses of other shells: the calibrated model is far closer than the
+  // nominal.
+  const auto v = runRobocal("simulate --model " + kModel + " --truth " + cell.truth_path +
+                            " --noise-mm 0 --points-per-shell 40 --out " + (cell.dir / "v.csv"));
+  REQUIRE(v.exit_code == 0);
+  const Model truth = loadModelFile(cell.truth_path);
+  const Model calibrated = loadModelFile(result["calibrated_file"].get<std::string>());
+  const auto cmp = compareWithTruth(loadModelFile(kModel), calibrated, truth,
+                                    loadSamplesFile(cell.dir / "v.csv"));
+  INFO("nominal " << cmp.nominal_rms_mm << " calibrated " << cmp.calibrated_rms_mm);
+  CHECK(cmp.calibrated_rms_mm < 0.2 * cmp.nominal_rms_mm);
+  CHECK(cmp.calibrated_rms_mm < 0.15);
+}
+
+TEST_CASE("kill -9 at random moments: every planned point is measured exactly once", "[e2e]") {
+  Cell cell({"B1C1", "B2C2", "B3C3"}, 12);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> when(1.0, 6.0);
+  std::string run_id;
+  int kills = 0;
+  for (int round = 0; round < 8; ++round) {
+    auto c = cell.daemon->client();
+    c->send({{"cmd", "watch"}, {"enable", true}});
+    const json req = round == 0 ? json{{"cmd", "start"}, {"token", cell.daemon->token()}}
+                                : json{{"cmd", "resume"}, {"token", cell.daemon->token()}};
+    const json ack = c->request(req, 30, "ACK");
+    INFO(ack.dump());
+    REQUIRE(ack["class"] == "ACK");
+    if (round < 4) {
+      // Run for a while, then crash: the state at the kill is whatever it happens to be.
+      const std::string state = cell.operate(*c, {"done", "paused", "error"}, when(rng));
+      REQUIRE(state.empty());
+      cell.daemon->kill9();
+      ++kills;
+      cell.daemon->start();
+      const json st = cell.daemon->client()->request({{"cmd", "status"}});
+      CHECK(st["state"] == "interrupted");
+      run_id = st["run"];
+    } else {
+      REQUIRE(cell.operate(*c, {"done", "paused", "error"}, 240) == "done");
+      break;
+    }
+  }
+  CHECK(kills == 4);
+  const Plan plan = loadPlanFile(cell.runDir(run_id) + "/plan.json");
+  const auto samples = loadSamplesFile(cell.runDir(run_id) + "/samples.csv");
+  CHECK(samples.size() == plannedPoints(plan).size());  // no duplicates...
+  CHECK(keys(samples) == plannedPoints(plan));          // ...and none missing
+  CHECK(cell.sim->status("broken_events") == "0");
+}
+
+TEST_CASE("faults mid-run stop the robot, pause the run and lose nothing", "[e2e]") {
+  Cell cell({"B1C1", "B2C2"}, 13);
+  auto c = cell.daemon->client();
+  c->send({{"cmd", "watch"}, {"enable", true}});
+  REQUIRE(c->request({{"cmd", "start"}, {"token", cell.daemon->token()}}, 30, "ACK")["class"] ==
+          "ACK");
+
+  struct Fault {
+    std::string command, expect;
+  };
+  const std::vector<Fault> faults = {{"fault error Position out of range", "out of range"},
+                                     {"fault stall bar 5", "bar"},
+                                     {"connect B1C1 bar_mm=144", "range"}};
+  for (const Fault& fault : faults) {
+    INFO(fault.command);
+    {
+      std::vector<json> seen;
+      // Let it measure a few points, then inject the fault.
+      const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(3);
+      while (std::chrono::steady_clock::now() < until) cell.operate(*c, {}, 0.3, &seen);
+      REQUIRE_THAT(cell.sim->control(fault.command), Contains("ok"));
+      const json paused = waitFor(*c, "STATE", 30, "paused", &seen).value();
+      INFO(paused.dump());
+      CHECK_THAT(paused["reason"].get<std::string>(),
+                 Contains(fault.expect, Catch::CaseSensitive::No));
+      CHECK(cell.sim->status("moving") == "0");  // the robot is stopped
+      // Nothing lost: every SAMPLE announced is on disk.
+      const json st = c->request({{"cmd", "status"}}, 10, "STATUS");
+      const auto samples = loadSamplesFile(cell.runDir(st["run"]) + "/samples.csv");
+      CHECK(static_cast<int>(samples.size()) == st["points_done"].get<int>());
+      cell.sim->control("reset");
+      // Resume goes through detach / connect again and carries on.
+      REQUIRE(c->request({{"cmd", "resume"}, {"token", cell.daemon->token()}}, 30,
+                         "ACK")["class"] == "ACK");
+    }
+  }
+  CHECK(cell.operate(*c, {"done", "paused", "error"}, 240) == "done");
+}
