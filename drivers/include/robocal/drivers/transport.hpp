@@ -41,6 +41,8 @@ bool isPseudoTerminal(const std::string& path);
 // number equals usb_serial and/or whose description, product or manufacturer contains
 // usb_description. PortError listing the ports present when nothing (or more than one) matches.
 std::string resolvePortPath(const SerialConfig& config);
+// The matching part of resolvePortPath, on a given list of ports.
+std::string matchPort(const std::vector<PortInfo>& ports, const SerialConfig& config);
 
 // Runs `io` in the calling thread until done() or the deadline; returns done().
 bool runIoUntil(boost::asio::io_context& io, const std::function<bool()>& done,
