@@ -68,14 +68,16 @@ void BarReader::arm() {
                                      disconnect_reason_ = link_.disconnected(ec.message()).what();
                                      return;
                                    }
-                                   received(n);
+                                   // Keep receiving even if the onLine callback throws.
+                                   const std::string bytes(buffer_.data(), n);
                                    arm();
+                                   received(bytes);
                                  });
 }
 
-void BarReader::received(std::size_t n) {
+void BarReader::received(const std::string& bytes) {
   std::vector<std::string> lines;
-  splitter_.feed(std::string_view(buffer_.data(), n), lines);
+  splitter_.feed(bytes, lines);
   for (const auto& l : lines) handleLine(l);
   if (splitter_.pending().size() > kMaxLineBytes) dropPartial();
 }

@@ -177,8 +177,11 @@ void ValController::arm() {
                                      return;
                                    }
                                    last_rx_ = Clock::now();
-                                   received(std::string_view(buffer_.data(), n));
-                                   if (!alive.expired()) arm();
+                                   // Keep receiving even if a handler called from received()
+                                   // throws (a caller's progress callback stopping a move).
+                                   const std::string bytes(buffer_.data(), n);
+                                   arm();
+                                   received(bytes);
                                  });
 }
 

@@ -369,12 +369,26 @@ class Cell {
     }
     const auto list = parseConnections(name);
     if (list.size() != 1) throw std::invalid_argument("connect one ball to one chuck, e.g. B1C2");
+    const Connection previous = connection_;
     connection_ = list[0];
+    // A bar whose ends are further apart (or closer) than its travel cannot be seated: the
+    // operator cannot attach it, and the robot has to move first.
+    const double length = bar_mm >= 0 ? bar_mm : trueLength() - extension_mm;
+    const double misfit = trueLength() - length - extension_mm;
+    if (std::abs(misfit) > o_.range_mm) {
+      connection_ = previous;
+      char buf[200];
+      std::snprintf(buf, sizeof buf,
+                    "does not fit: the bar would be %s by %.3f mm (range +/-%.3f mm); move the "
+                    "ball by %+.3f mm along the bar and connect again",
+                    misfit > 0 ? "stretched" : "compressed", std::abs(misfit), o_.range_mm, -misfit);
+      throw std::invalid_argument(buf);
+    }
     connected_ = true;
     connection_name_ = connectionName(connection_);
     extension_mm_ = extension_mm;
     // bar_mm < 0: a bar of exactly the current length (handy for tests and demos).
-    bar_mm_ = bar_mm >= 0 ? bar_mm : trueLength() - extension_mm;
+    bar_mm_ = length;
     over_ = false;
     checkBar();
   }

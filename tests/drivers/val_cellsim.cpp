@@ -206,3 +206,23 @@ TEST_CASE("VAL II: wrong baud rate and missing port are explained", "[drivers][v
     }
   }
 }
+
+TEST_CASE("VAL II: a progress callback that throws stops the wait, the driver stays usable",
+          "[drivers][val]") {
+  CellSimProcess sim({"--time-scale", "1", "--speed", "20"});
+  boost::asio::io_context io;
+  ValController val(io, sim.driversConfig().val);
+  val.connect();
+  struct Stop {};
+  int polls = 0;
+  CHECK_THROWS_AS(val.moveJoints({20, 45, -90, 0, 45, 0},
+                                 [&](const WhereReply&) {
+                                   if (++polls == 3) throw Stop{};
+                                 }),
+                  Stop);
+  val.abort();
+  const Joints6 here = val.where().joints_deg;
+  CHECK(here[0] > 0);
+  CHECK(here[0] < 19);
+  CHECK(maxDiff(val.moveJoints({0, 45, -90, 0, 45, 0}).joints_deg, kStart) <= 0.006);
+}

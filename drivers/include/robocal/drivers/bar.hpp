@@ -75,7 +75,7 @@ class BarReader {
 
  private:
   void arm();
-  void received(std::size_t n);
+  void received(const std::string& bytes);
   void handleLine(const std::string& line);
   void drainBacklog();
   void dropPartial();
