@@ -381,7 +381,8 @@ class Cell {
       std::snprintf(buf, sizeof buf,
                     "does not fit: the bar would be %s by %.3f mm (range +/-%.3f mm); move the "
                     "ball by %+.3f mm along the bar and connect again",
-                    misfit > 0 ? "stretched" : "compressed", std::abs(misfit), o_.range_mm, -misfit);
+                    misfit > 0 ? "stretched" : "compressed", std::abs(misfit), o_.range_mm,
+                    -misfit);
       throw std::invalid_argument(buf);
     }
     connected_ = true;
