@@ -160,6 +160,7 @@ ValConfig valConfigFromJson(const json& j, const std::string& where) {
   r.get("still_polls", c.still_polls);
   r.get("motion_timeout_s", c.motion_timeout_s);
   r.get("stopped_short_s", c.stopped_short_s);
+  r.get("where_retries", c.where_retries);
   r.finish();
   validate(c, where);
   return c;
@@ -210,6 +211,8 @@ void validate(const ValConfig& c, const std::string& where) {
   if (c.still_polls < 1) throw ConfigError(where + ".still_polls: must be at least 1");
   checkPositive(c.motion_timeout_s, where + ".motion_timeout_s");
   checkPositive(c.stopped_short_s, where + ".stopped_short_s");
+  if (c.where_retries < 0 || c.where_retries > 100)
+    throw ConfigError(where + ".where_retries: must be 0 to 100");
 }
 
 BarConfig barConfigFromJson(const json& j, const std::string& where) {
@@ -323,7 +326,8 @@ json toJson(const ValConfig& c) {
               {"still_tol_deg", c.still_tol_deg},
               {"still_polls", c.still_polls},
               {"motion_timeout_s", c.motion_timeout_s},
-              {"stopped_short_s", c.stopped_short_s}};
+              {"stopped_short_s", c.stopped_short_s},
+              {"where_retries", c.where_retries}};
 }
 
 json toJson(const BarConfig& c) {

@@ -398,7 +398,20 @@ void ValController::pollMotion(std::shared_ptr<MotionMonitor> monitor, Joints6 t
   ++stats_.where_polls;
   std::weak_ptr<int> alive = alive_;
   asyncWhere([this, alive, monitor, target, handler, progress](std::exception_ptr e, WhereReply w) {
-    if (e) return handler(e, {});
+    if (e) {
+      // A garbled or cut WHERE reply is asked again (where_retries in a row) before giving up.
+      try {
+        std::rethrow_exception(e);
+      } catch (const ProtocolError&) {
+        if (++monitor->unreadable <= dialect_.config().where_retries && !alive.expired()) {
+          ++stats_.where_retries;
+          return pollMotion(monitor, target, handler, progress);
+        }
+      } catch (...) {
+      }
+      return handler(e, {});
+    }
+    monitor->unreadable = 0;
     if (progress) progress(w);
     const auto state = monitor->update(w.joints_deg, Clock::now());
     if (state == MotionMonitor::State::kArrived) return handler(nullptr, w);

@@ -303,7 +303,12 @@ class Cell {
       }
       if (w[0] == "fault" && w.size() >= 2) {
         const std::string& f = w[1];
-        if (f == "garbage")
+        const bool val = w.size() > 2 && w[2] == "val";
+        if (f == "garbage" && val)
+          val_garbage_next_ = true;
+        else if (f == "drop" && val)
+          val_drop_next_ = true;
+        else if (f == "garbage")
           garbage_next_ = true;
         else if (f == "drop")
           drop_next_ = true;
@@ -527,6 +532,18 @@ class Cell {
     } else {
       lines = valCommand(line);
     }
+    // A reply line lost or garbled on the wire (the last one: WHERE's joint values).
+    if (!lines.empty()) {
+      ++val_replies_;
+      const auto every = [&](long n) { return n > 0 && val_replies_ % n == 0; };
+      if (val_drop_next_ || every(o_.val_drop_every)) {
+        val_drop_next_ = false;
+        lines.pop_back();
+      } else if (val_garbage_next_ || every(o_.val_garbage_every)) {
+        val_garbage_next_ = false;
+        lines.back().insert(lines.back().size() / 2, std::string("\x93\xF1\xFE", 3));
+      }
+    }
     std::string out = eol;
     for (const auto& l : lines) out += l + eol;
     val_.write(out + prompt);
@@ -683,7 +700,8 @@ class Cell {
   std::vector<BrokenEvent> events_;
   drivers::LineSplitter bar_splitter_;
   long bar_lines_ = 0, garbage_count_ = 0;
-  bool garbage_next_ = false, drop_next_ = false;
+  bool garbage_next_ = false, drop_next_ = false, val_garbage_next_ = false, val_drop_next_ = false;
+  long val_replies_ = 0;
 };
 
 // Line commands from a stream (a unix-socket client or stdin), one reply line each.

@@ -41,6 +41,7 @@ struct Options {
   int val_baud = 9600, bar_baud = 9600;  // the devices' rates; a driver at another rate sees garble
   // Faults (0 = off).
   long bar_garbage_every = 0, bar_drop_every = 0, bar_stall_after = 0, val_stall_after = 0;
+  long val_garbage_every = 0, val_drop_every = 0;  // in replies with lines (WHERE)
   double stall_s = 2.0;
   long val_disconnect_after = 0, bar_disconnect_after = 0;
   double reconnect_after_s = 1.0;

@@ -16,7 +16,7 @@ constexpr const char* kHelp = R"(usage: robocal-cellsim --model TRUTH.json [opti
 A simulated robot cell on two pseudo-terminals: a VAL II controller and a ball-bar reader.
 Prints "val PATH", "bar PATH" (and "control PATH"), then "ready". Control commands, one per
 line on the control socket or stdin: status | events | connect B1C2 [extension_mm=E] [bar_mm=L|here] |
-connect none | estop | reset | fault garbage|drop|noprobe [off]|error [TEXT] |
+connect none | estop | reset | fault garbage|drop [val] | fault noprobe [off] | fault error [TEXT] |
 fault stall val|bar S | fault disconnect val|bar S | quit
 
   --model FILE               the true robot (model format, e.g. truth.json)       required
@@ -48,6 +48,8 @@ Faults (0 = off):
   --bar-garbage-every N      garbage bytes in / a cut-off of every Nth bar line
   --bar-drop-every N         every Nth bar line is not sent
   --bar-stall-after N        after N bar lines, silence for --stall-s
+  --val-garbage-every N      garbage bytes in the last line of every Nth reply with lines
+  --val-drop-every N         the last line of every Nth reply with lines is lost
   --val-stall-after N        after N commands, the controller hangs for --stall-s
   --stall-s S                                                                     [2]
   --val-disconnect-after N   after N commands the controller's port goes away...
@@ -107,6 +109,8 @@ int main(int argc, char** argv) {
                                                {"bar-baud", true},
                                                {"bar-garbage-every", true},
                                                {"bar-drop-every", true},
+                                               {"val-garbage-every", true},
+                                               {"val-drop-every", true},
                                                {"bar-stall-after", true},
                                                {"val-stall-after", true},
                                                {"stall-s", true},
@@ -201,6 +205,8 @@ int main(int argc, char** argv) {
     o.bar_baud = static_cast<int>(num("bar-baud", 9600));
     o.bar_garbage_every = count("bar-garbage-every");
     o.bar_drop_every = count("bar-drop-every");
+    o.val_garbage_every = count("val-garbage-every");
+    o.val_drop_every = count("val-drop-every");
     o.bar_stall_after = count("bar-stall-after");
     o.val_stall_after = count("val-stall-after");
     o.stall_s = num("stall-s", o.stall_s);

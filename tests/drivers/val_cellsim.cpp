@@ -226,3 +226,27 @@ TEST_CASE("VAL II: a progress callback that throws stops the wait, the driver st
   CHECK(here[0] < 19);
   CHECK(maxDiff(val.moveJoints({0, 45, -90, 0, 45, 0}).joints_deg, kStart) <= 0.006);
 }
+
+TEST_CASE("VAL II: garbled and lost WHERE lines during a move are asked again", "[drivers][val]") {
+  CellSimProcess sim({"--time-scale", "20", "--val-garbage-every", "3", "--val-drop-every", "5"});
+  boost::asio::io_context io;
+  ValController val(io, sim.driversConfig().val);
+  val.connect();
+  const Joints6 target{8, 50, -85, 3, 40, -5};
+  CHECK(maxDiff(val.moveJoints(target).joints_deg, target) <= 0.006);
+  CHECK(maxDiff(val.moveJoints(kStart).joints_deg, kStart) <= 0.006);
+  CHECK(val.stats().where_retries >= 1);
+}
+
+TEST_CASE("VAL II: a single WHERE with a lost or garbled line is a ProtocolError",
+          "[drivers][val]") {
+  CellSimProcess sim;
+  boost::asio::io_context io;
+  ValController val(io, sim.driversConfig().val);
+  val.connect();
+  REQUIRE(sim.control("fault drop val").rfind("ok", 0) == 0);
+  CHECK_THROWS_AS(val.where(), ProtocolError);
+  REQUIRE(sim.control("fault garbage val").rfind("ok", 0) == 0);
+  CHECK_THROWS_AS(val.where(), ProtocolError);
+  CHECK(maxDiff(val.where().joints_deg, kStart) <= 0.006);
+}

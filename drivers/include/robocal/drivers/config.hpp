@@ -56,6 +56,7 @@ struct ValConfig {
   int still_polls = 2;            // consecutive unchanged polls that make "still"
   double motion_timeout_s = 120;  // whole move, command to still at target
   double stopped_short_s = 3.0;   // still but not at target this long: the arm was stopped
+  int where_retries = 2;          // unreadable WHERE replies in a row tolerated during a move
 };
 
 struct BarConfig {

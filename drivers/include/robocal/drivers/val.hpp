@@ -34,6 +34,7 @@ struct ValStats {
   long controller_errors = 0;
   long unsolicited_lines = 0;  // received between commands (an E-stop message, late replies)
   long where_polls = 0;        // WHEREs sent while waiting for motions
+  long where_retries = 0;      // of which asked again after an unreadable reply
 };
 
 // Decides from successive WHERE replies whether a move has ended (pure; used by the driver).
@@ -44,6 +45,7 @@ class MotionMonitor {
   State update(const Joints6& joints_deg, Clock::time_point now);
   // Why the move failed, for kStoppedShort and kTimedOut.
   std::string explain(State state, const Joints6& joints_deg) const;
+  int unreadable = 0;  // WHERE replies in a row that could not be read (kept by the driver)
 
  private:
   const ValConfig& config_;
