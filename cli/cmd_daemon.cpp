@@ -4,6 +4,7 @@
 
 #include <robocal/formats/error.hpp>
 #include <robocal/proto/client.hpp>
+#include <robocal/proto/sim_operator.hpp>
 
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/local/stream_protocol.hpp>
@@ -250,18 +251,11 @@ int watch(const std::vector<std::string>& argv) {
         std::printf("%s\n*** OPERATOR: %s ***\n\n", tty ? "\r\033[K" : "",
                     obj->value("message", "").c_str());
       if (!operator_socket.empty() && obj->value("shell", 0) > 0) {
-        std::string command = "connect none";
-        if (obj->value("action", "") == "connect") {
-          char buf[128];
-          std::snprintf(buf, sizeof buf, "connect B%dC%d extension_mm=%g bar_mm=%g",
-                        obj->value("ball", 0), obj->value("chuck", 0),
-                        obj->value("extension_mm", 0.0), bar_mm);
-          command = buf;
-        }
-        const std::string reply = cellsimControl(operator_socket, command);
-        if (!as_json)
-          std::printf("(simulated operator: %s -> %s)\n", command.c_str(), reply.c_str());
-        client->send({{"cmd", "confirm"}, {"shell", obj->value("shell", 0)}, {"token", tok}});
+        const auto control = [&](const std::string& c) {
+          return cellsimControl(operator_socket, c);
+        };
+        for (const std::string& action : proto::answerPrompt(*client, *obj, control, tok, bar_mm))
+          if (!as_json) std::printf("(simulated operator: %s)\n", action.c_str());
       }
     } else if (cls == "RESULT" && !as_json) {
       std::printf("%s\nRESULT set %d: %zu samples, rank %d, RMS %.4f mm (before %.4f mm)",

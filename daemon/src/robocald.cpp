@@ -172,6 +172,9 @@ class Daemon {
       case proto::Cmd::kConfirm:
         reply(run_.confirm(req.shell));
         break;
+      case proto::Cmd::kNudge:
+        reply(run_.nudge(req.shell, req.nudge_mm), "moving the ball");
+        break;
       case proto::Cmd::kPause:
         reply(run_.pause(req.reason), "pausing at the next step");
         break;

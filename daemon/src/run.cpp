@@ -86,6 +86,8 @@ struct RunController::Impl {
   json prompt;               // the pending PROMPT, null when none
   int prompt_shell = 0;
   int confirms = 0;
+  std::optional<double> nudge_mm;  // requested, not yet done
+  double nudged_mm = 0;            // done for the pending prompt
   int shell_number = 0, shells_total = 0, points_done = 0, points_total = 0;
   double eta_s = 0;
   json latest_bar;
@@ -256,13 +258,17 @@ struct RunController::Impl {
   }
 
   // ------------------------------------------------------------------ the operator
-  void waitConfirm(RunDir& dir, json prompt_object, int shell) {
+  // Waits for the operator's confirm; `on_nudge` (when given) carries out nudge requests.
+  void waitConfirm(RunDir& dir, json prompt_object, int shell,
+                   const std::function<void(double)>& on_nudge = {}) {
     int seen;
     {
       std::lock_guard lock(mutex);
       prompt = prompt_object;
       prompt_shell = shell;
       seen = confirms;
+      nudge_mm.reset();
+      nudged_mm = 0;
     }
     setState("awaiting_confirm", prompt_object.value("message", ""));
     dir.logEvent({{"event", "prompt"}, {"prompt", prompt_object}});
@@ -275,6 +281,16 @@ struct RunController::Impl {
           prompt = nullptr;
           break;
         }
+      }
+      std::optional<double> nudge;
+      {
+        std::lock_guard lock(mutex);
+        nudge.swap(nudge_mm);
+      }
+      if (nudge && on_nudge) {
+        on_nudge(*nudge);
+        dir.logEvent({{"event", "nudged"}, {"shell", shell}, {"mm", *nudge}});
+        publish({{"class", "EVENT"}, {"event", "nudged"}, {"shell", shell}, {"mm", *nudge}}, false);
       }
       io.restart();
       io.run_for(std::chrono::milliseconds(20));
@@ -434,6 +450,35 @@ struct RunController::Impl {
     });
   }
 
+  struct Measurement {
+    JointsDeg joints_deg;
+    double deflection_mm, spread_mm;
+    std::size_t readings;
+  };
+  // The actual joints (WHERE) and the bar averaged over bar_window_s, watched.
+  Measurement measureHere() {
+    Measurement m;
+    m.joints_deg = fromDriver(val->where().joints_deg);
+    window.clear();
+    collecting = true;
+    spin(config.bar_window_s, true);
+    const auto deadline =
+        Clock::now() + std::chrono::duration<double>(config.drivers.bar.stale_after_s);
+    while (window.empty() && Clock::now() < deadline) spin(0.02, true);
+    collecting = false;
+    if (window.empty()) throw StopRun{StopRun::kFault, "no ball-bar reading to record"};
+    double sum = 0, lo = window.front(), hi = window.front();
+    for (double v : window) {
+      sum += v;
+      lo = std::min(lo, v);
+      hi = std::max(hi, v);
+    }
+    m.deflection_mm = sum / window.size();
+    m.spread_mm = hi - lo;
+    m.readings = window.size();
+    return m;
+  }
+
   void runShells(RunDir& dir, const Plan& plan, bool resuming) {
     const CellConfig& cell_config = cellFor(plan);
     std::vector<Sample> samples = dir.loadSamples();
@@ -456,11 +501,15 @@ struct RunController::Impl {
     bool bar_maybe_attached = resuming;
     int replans = 0;
     std::optional<Model> refined;
-    std::size_t refined_at = 0;  // samples in the last refit
-    if (config.centering && !samples.empty()) {
-      refined = refine(samples, plan);
-      refined_at = samples.size();
-    }
+    // The centring fit also uses measurements that are not data points (at the connect pose,
+    // after corrective moves): they tell the model's error where the robot is about to go.
+    std::vector<Sample> centring = samples;
+    std::size_t refined_at = 0;  // centring measurements in the last refit
+    auto refit = [&] {
+      refined = refine(centring, plan);
+      refined_at = centring.size();
+    };
+    if (config.centering && !centring.empty()) refit();
 
     for (std::size_t si = 0; si < plan.shells.size(); ++si) {
       const ShellPlan& planned = plan.shells[si];
@@ -507,7 +556,10 @@ struct RunController::Impl {
                            " mm extension"
                      : " without extension") +
                 ", then confirm."}},
-          planned.shell);
+          planned.shell, [&](double mm) {
+            // The bar is not attached yet: the ball moves along the line to the chuck.
+            q = move(correction(refined ? *refined : nominal, c, q, -mm), false, false);
+          });
       bar_maybe_attached = true;
       bar_offset_mm = cell_config.bar.nominal_length_mm + planned.extension_mm;
       // The bar must read, and read near zero, before anything moves with it attached.
@@ -535,6 +587,22 @@ struct RunController::Impl {
         watchBar(false);
       }
 
+      // A centring measurement as a sample of this shell.
+      auto centringSample = [&](const Measurement& m) {
+        Sample s;
+        s.shell = planned.shell;
+        s.ball_index = c.ball_index;
+        s.chuck_index = c.chuck_index;
+        s.extension_mm = planned.extension_mm;
+        s.joints_deg = m.joints_deg;
+        s.length_mm = bar_offset_mm + m.deflection_mm;
+        return s;
+      };
+      if (config.centering) {
+        centring.push_back(centringSample(measureHere()));
+        refit();
+      }
+
       // What is left of the shell, re-planned from here when points are done or the model is
       // refined.
       ShellPlan shell = planned;
@@ -543,11 +611,21 @@ struct RunController::Impl {
         for (const auto& st : planned.steps)
           if (st.kind == StepKind::kPoint && !is_done(st)) shell.steps.push_back(st);
       }
-      if (already > 0 || refined) {
+      // Re-plans the steps from `from` on, starting at `at`, with the latest model; a point that
+      // is no longer safe to reach is dropped, and said so.
+      auto replanFrom = [&](std::size_t from, const JointsDeg& at, const std::string& why) {
         const ShellPlanner planner(refined ? *refined : nominal, cell_config);
-        shell = planner.replanRemaining(shell, 0, q);
-        recordReplan(dir, replans, shell, 0, already > 0 ? "resume" : "refined model");
-      }
+        const std::size_t dropped_before = shell.dropped.size();
+        shell = planner.replanRemaining(shell, from, at);
+        for (std::size_t k = dropped_before; k < shell.dropped.size(); ++k)
+          event(dir, {{"event", "point_dropped"},
+                      {"shell", planned.shell},
+                      {"lat_deg", shell.dropped[k].lat_deg},
+                      {"lon_deg", shell.dropped[k].lon_deg},
+                      {"reason", shell.dropped[k].reason}});
+        recordReplan(dir, replans, shell, from, why);
+      };
+      if (already > 0 || refined) replanFrom(0, q, already > 0 ? "resume" : "refined model");
 
       setState("measuring", "shell " + std::to_string(planned.shell) + " " + conn);
       int corrections = 0;
@@ -568,30 +646,17 @@ struct RunController::Impl {
                       {"step", next},
                       {"deflection_mm", r.deflection_mm}});
           q = move(correction(model, c, q, r.deflection_mm), true, false);
-          const ShellPlanner planner(model, cell_config);
-          shell = planner.replanRemaining(shell, next, q);
-          recordReplan(dir, replans, shell, next, "recentre");
+          centring.push_back(centringSample(measureHere()));
+          refit();
+          replanFrom(next, q, "recentre");
           continue;
         }
         if (step.kind == StepKind::kPoint) {
           const auto motion_end = Clock::now();
           spin(config.settle_s, true);
           const double dwell_s = std::chrono::duration<double>(Clock::now() - motion_end).count();
-          const JointsDeg actual = fromDriver(val->where().joints_deg);
-          window.clear();
-          collecting = true;
-          spin(config.bar_window_s, true);
-          const auto window_deadline =
-              Clock::now() + std::chrono::duration<double>(config.drivers.bar.stale_after_s);
-          while (window.empty() && Clock::now() < window_deadline) spin(0.02, true);
-          collecting = false;
-          if (window.empty()) throw StopRun{StopRun::kFault, "no bar reading at a data point"};
-          double sum = 0, lo = window.front(), hi = window.front();
-          for (double v : window) {
-            sum += v;
-            lo = std::min(lo, v);
-            hi = std::max(hi, v);
-          }
+          const Measurement m = measureHere();
+          const JointsDeg actual = m.joints_deg;
           Sample s;
           s.shell = planned.shell;
           s.ball_index = c.ball_index;
@@ -600,9 +665,10 @@ struct RunController::Impl {
           s.lat_deg = step.lat_deg;
           s.lon_deg = step.lon_deg;
           s.joints_deg = actual;
-          s.length_mm = bar_offset_mm + sum / window.size();
-          dir.appendSample(s, hi - lo);  // on disk before the robot moves again
+          s.length_mm = bar_offset_mm + m.deflection_mm;
+          dir.appendSample(s, m.spread_mm);  // on disk before the robot moves again
           samples.push_back(s);
+          centring.push_back(s);
           const auto [lat, lon] = pointKey(s.lat_deg, s.lon_deg);
           done.insert({s.shell, lat, lon});
           publish({{"class", "SAMPLE"},
@@ -611,20 +677,17 @@ struct RunController::Impl {
                    {"lon_deg", s.lon_deg},
                    {"joints", std::vector<double>(actual.data(), actual.data() + 6)},
                    {"length_mm", s.length_mm},
-                   {"spread_mm", hi - lo},
-                   {"readings", window.size()},
+                   {"spread_mm", m.spread_mm},
+                   {"readings", m.readings},
                    {"dwell_s", dwell_s}},
                   false);
           updateProgress(static_cast<int>(samples.size()), total, started, done_at_start);
           // Refit as the data grow by 5% (every sample at first): a fit costs milliseconds
           // that grow with the samples, and a model from a few more samples changes little.
           if (config.centering && next + 1 < shell.steps.size() &&
-              samples.size() >= refined_at + 1 + refined_at / 20) {
-            refined = refine(samples, plan);
-            refined_at = samples.size();
-            const ShellPlanner planner(*refined, cell_config);
-            shell = planner.replanRemaining(shell, next + 1, actual);
-            recordReplan(dir, replans, shell, next + 1, "refined model");
+              centring.size() >= refined_at + 1 + refined_at / 20) {
+            refit();
+            replanFrom(next + 1, actual, "refined model");
           }
         }
         ++next;
@@ -824,6 +887,21 @@ std::string RunController::confirm(std::optional<int> shell) {
     return "the pending prompt is for shell " + std::to_string(impl_->prompt_shell) + ", not " +
            std::to_string(*shell);
   ++impl_->confirms;
+  return {};
+}
+
+std::string RunController::nudge(std::optional<int> shell, double mm) {
+  std::lock_guard lock(impl_->mutex);
+  if (impl_->prompt.is_null() || impl_->prompt.value("action", "") != "connect")
+    return "nothing to nudge: no connect prompt is pending";
+  if (shell && *shell != impl_->prompt_shell)
+    return "the pending prompt is for shell " + std::to_string(impl_->prompt_shell);
+  if (std::abs(mm) > 5.0) return "a nudge moves at most 5 mm";
+  if (std::abs(impl_->nudged_mm + mm) > 10.0)
+    return "nudges for this connection would pass 10 mm in all: check the set-up";
+  if (impl_->nudge_mm) return "a nudge is still moving";
+  impl_->nudge_mm = mm;
+  impl_->nudged_mm += mm;
   return {};
 }
 

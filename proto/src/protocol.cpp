@@ -1,12 +1,14 @@
 #include <robocal/proto/protocol.hpp>
 
 #include <array>
+#include <cmath>
 #include <utility>
 
 namespace robocal::proto {
 namespace {
 
-constexpr std::array<std::pair<Cmd, const char*>, 10> kCmds = {{{Cmd::kStatus, "status"},
+constexpr std::array<std::pair<Cmd, const char*>, 11> kCmds = {{{Cmd::kStatus, "status"},
+                                                                {Cmd::kNudge, "nudge"},
                                                                 {Cmd::kWatch, "watch"},
                                                                 {Cmd::kPlan, "plan"},
                                                                 {Cmd::kStart, "start"},
@@ -80,8 +82,8 @@ Request parseRequest(std::string_view line) {
     }
   if (!known)
     throw RequestError("unknown cmd \"" + name +
-                           "\" (status, watch, plan, start, confirm, pause, resume, abort, result, "
-                           "runs)",
+                           "\" (status, watch, plan, start, confirm, nudge, pause, resume, abort, "
+                           "result, runs)",
                        name);
   req.token = stringField(obj, "token", name);
   switch (req.cmd) {
@@ -104,6 +106,18 @@ Request parseRequest(std::string_view line) {
               field(obj, "shell", json::value_t::number_integer, "a whole number", name))
         req.shell = v->get<int>();
       break;
+    case Cmd::kNudge: {
+      const auto it = obj.find("mm");
+      if (it == obj.end() || !it->is_number())
+        throw RequestError("nudge needs \"mm\": a number (mm along the bar, + away from the chuck)",
+                           name);
+      req.nudge_mm = it->get<double>();
+      if (!std::isfinite(req.nudge_mm)) throw RequestError("nudge \"mm\" must be finite", name);
+      if (const json* v =
+              field(obj, "shell", json::value_t::number_integer, "a whole number", name))
+        req.shell = v->get<int>();
+      break;
+    }
     case Cmd::kResume:
       req.run_id = stringField(obj, "run", name);
       break;

@@ -34,6 +34,7 @@ DaemonProcess::~DaemonProcess() {
 void DaemonProcess::start() {
   const std::string out = dir_ + "/stdout.txt";
   std::filesystem::remove(out);
+  std::fflush(nullptr);  // the child must not inherit unwritten output
   pid_ = ::fork();
   if (pid_ == 0) {
     std::freopen(out.c_str(), "w", stdout);

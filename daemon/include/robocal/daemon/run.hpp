@@ -38,6 +38,9 @@ class RunController {
   // Each returns an error message for the operator, or "" when accepted.
   std::string start(const Plan& plan);
   std::string confirm(std::optional<int> shell);
+  // While a connect prompt waits: move the ball mm along the bar's line (+: away from the
+  // chuck) so that the bar fits; at most 5 mm a time and 10 mm per prompt.
+  std::string nudge(std::optional<int> shell, double mm);
   std::string pause(const std::string& reason);
   std::string resume(const std::string& run_id);
   std::string abort(const std::string& reason);

@@ -23,6 +23,7 @@ enum class Cmd {
   kPlan,
   kStart,
   kConfirm,
+  kNudge,
   kPause,
   kResume,
   kAbort,
@@ -49,7 +50,8 @@ struct Request {
   bool watch_enable = true;  // watch
   std::string plan_path;     // plan (a plan file to load) and start (optional)
   std::string cell_path;     // plan: plan from this cell file instead of the configured one
-  std::optional<int> shell;  // confirm: the shell the operator confirms (must match)
+  std::optional<int> shell;  // confirm, nudge: the shell of the pending prompt (must match)
+  double nudge_mm = 0;       // nudge: move the ball this far along the bar (+: away from the chuck)
   std::string run_id;        // resume: an interrupted run to continue (default: the latest)
   std::string reason;        // pause / abort: the operator's words, for the log
 };
