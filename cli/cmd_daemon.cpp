@@ -160,6 +160,17 @@ int confirm(const std::vector<std::string>& argv) {
       "usage: robocal confirm [--shell N] [options]\n  Tells robocald the bar is connected (or "
       "detached) as the prompt asked.\n");
 }
+int nudge(const std::vector<std::string>& argv) {
+  return simple(
+      argv, "nudge", true, {"mm", "shell"},
+      [](const Args& a, json& r) {
+        if (!a.has("mm")) throw UsageError("--mm is required");
+        r["mm"] = a.number("mm", 0);
+        if (a.has("shell")) r["shell"] = a.integer("shell", 0);
+      },
+      "usage: robocal nudge --mm D [--shell N] [options]\n  While a connect prompt waits: moves "
+      "the ball D mm along the bar's line (+ away from the\n  chuck) so the bar can be seated.\n");
+}
 int pause(const std::vector<std::string>& argv) {
   return simple(
       argv, "pause", true, {"reason"},
@@ -293,6 +304,7 @@ const RegisterCommand r1({"status", "robocald: state, run progress, devices", st
 const RegisterCommand r2({"watch", "robocald: live bar, progress and prompts", watch});
 const RegisterCommand r3({"start", "robocald: start a calibration run", start});
 const RegisterCommand r4({"confirm", "robocald: the bar is connected as asked", confirm});
+const RegisterCommand r11({"nudge", "robocald: move the ball so the bar fits", nudge});
 const RegisterCommand r5({"pause", "robocald: pause the run at the next step", pause});
 const RegisterCommand r6({"resume", "robocald: resume a paused or interrupted run", resume});
 const RegisterCommand r7({"abort", "robocald: stop the robot and end the run", abortRun});
