@@ -761,26 +761,25 @@ int run(const Options& o) {
     accept(*acceptor, cell);
     std::printf("control %s\n", o.control_path.c_str());
   }
+  // Control lines on stdin, replies on stdout. The stream, its buffer and the read loop live
+  // for the whole run.
+  asio::posix::stream_descriptor stdin_stream(io);
+  asio::streambuf stdin_buffer;
+  std::function<void()> read_stdin = [&]() {
+    asio::async_read_until(stdin_stream, stdin_buffer, '\n',
+                           [&](const boost::system::error_code& ec, std::size_t) {
+                             if (ec) return;  // end of input: the socket may still be used
+                             std::istream is(&stdin_buffer);
+                             std::string line;
+                             std::getline(is, line);
+                             std::printf("%s\n", cell.control(line).c_str());
+                             std::fflush(stdout);
+                             read_stdin();
+                           });
+  };
   if (o.stdin_control) {
-    asio::posix::stream_descriptor in(io, ::dup(STDIN_FILENO));
-    // stdin replies go to stdout: wrap a duplex pair would need two descriptors; use a session
-    // over stdin for reading and print replies directly.
-    auto buffer = std::make_shared<asio::streambuf>();
-    auto stdin_stream = std::make_shared<asio::posix::stream_descriptor>(std::move(in));
-    std::function<void()> next;
-    next = [&, buffer, stdin_stream]() {
-      asio::async_read_until(*stdin_stream, *buffer, '\n',
-                             [&, buffer](const boost::system::error_code& ec, std::size_t) {
-                               if (ec) return;
-                               std::istream is(buffer.get());
-                               std::string line;
-                               std::getline(is, line);
-                               std::printf("%s\n", cell.control(line).c_str());
-                               std::fflush(stdout);
-                               next();
-                             });
-    };
-    next();
+    stdin_stream.assign(::dup(STDIN_FILENO));
+    read_stdin();
   }
   std::printf("ready\n");
   std::fflush(stdout);
