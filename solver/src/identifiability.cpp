@@ -29,6 +29,10 @@ Eigen::MatrixXd triangularFactor(const Eigen::MatrixXd& jacobian) {
 Identifiability analyzeIdentifiability(const Eigen::MatrixXd& jacobian) {
   Identifiability out;
   out.threshold = kRankThreshold;
+  if (jacobian.rows() == 0 || jacobian.cols() == 0) {
+    for (int i = 0; i < jacobian.cols(); ++i) out.redundant.push_back(i);
+    return out;
+  }
   const Eigen::Index cols = jacobian.cols();
   Eigen::VectorXd norms = jacobian.colwise().norm();
   const double largest_norm = norms.maxCoeff();
@@ -41,7 +45,8 @@ Identifiability analyzeIdentifiability(const Eigen::MatrixXd& jacobian) {
       scaled.col(c) /= norms[c];
     }
   }
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd(triangularFactor(scaled));
+  const Eigen::MatrixXd r = triangularFactor(scaled);  // same singular values, 54 rows
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(r);
   out.singular_values = svd.singularValues();
   if (out.singular_values.size() == 0 || out.singular_values[0] <= 0) return out;
   out.singular_values /= out.singular_values[0];
@@ -53,7 +58,6 @@ Identifiability analyzeIdentifiability(const Eigen::MatrixXd& jacobian) {
   // Greedy basis in priority order: accept a column when it adds a direction that the columns
   // accepted so far do not span (relative residual above the rank threshold, as sqrt because
   // projection residuals behave like singular values).
-  const Eigen::MatrixXd r = triangularFactor(scaled);
   Eigen::MatrixXd q(r.rows(), 0);
   for (int index : priorityOrder()) {
     if (static_cast<int>(out.identified.size()) == out.rank) break;

@@ -24,7 +24,7 @@ struct SolveOptions {
   double cost_change_tol = 1e-12;  // stop when an accepted step lowers the cost by less (relative)
   double step_tol = 1e-12;         // stop when the scaled step is this small relative to x
   double gradient_tol = 1e-12;     // stop when max |scaled gradient| / cost is below this
-  double initial_lambda = 1e-4;    // damping, relative to the diagonal of the scaled J^T J
+  double initial_lambda = 1e-6;    // damping, relative to the diagonal of the scaled J^T J
   // Parameters to hold fixed in addition to the redundant ones (indices into ParamVector).
   std::vector<int> fixed;
   // A prior: when set (all positive), each parameter also gets the residual
