@@ -587,8 +587,8 @@ struct RunController::Impl {
         watchBar(false);
       }
 
-      // A centring measurement as a sample of this shell.
-      auto centringSample = [&](const Measurement& m) {
+      // A measurement as a sample of this shell (a data point adds its latitude and longitude).
+      auto shellSample = [&](const Measurement& m) {
         Sample s;
         s.shell = planned.shell;
         s.ball_index = c.ball_index;
@@ -599,7 +599,7 @@ struct RunController::Impl {
         return s;
       };
       if (config.centering) {
-        centring.push_back(centringSample(measureHere()));
+        centring.push_back(shellSample(measureHere()));
         refit();
       }
 
@@ -646,7 +646,7 @@ struct RunController::Impl {
                       {"step", next},
                       {"deflection_mm", r.deflection_mm}});
           q = move(correction(model, c, q, r.deflection_mm), true, false);
-          centring.push_back(centringSample(measureHere()));
+          centring.push_back(shellSample(measureHere()));
           refit();
           replanFrom(next, q, "recentre");
           continue;
@@ -657,15 +657,9 @@ struct RunController::Impl {
           const double dwell_s = std::chrono::duration<double>(Clock::now() - motion_end).count();
           const Measurement m = measureHere();
           const JointsDeg actual = m.joints_deg;
-          Sample s;
-          s.shell = planned.shell;
-          s.ball_index = c.ball_index;
-          s.chuck_index = c.chuck_index;
-          s.extension_mm = planned.extension_mm;
+          Sample s = shellSample(m);
           s.lat_deg = step.lat_deg;
           s.lon_deg = step.lon_deg;
-          s.joints_deg = actual;
-          s.length_mm = bar_offset_mm + m.deflection_mm;
           dir.appendSample(s, m.spread_mm);  // on disk before the robot moves again
           samples.push_back(s);
           centring.push_back(s);

@@ -33,26 +33,6 @@ std::string isoNow() {
          "Z";
 }
 
-// Appends text with one write and fsyncs; a crash leaves at most a torn last line.
-void appendDurably(const std::string& path, const std::string& text) {
-  const int fd = ::open(path.c_str(), O_WRONLY | O_APPEND | O_CREAT | O_CLOEXEC, 0644);
-  if (fd < 0) throw FormatError(path + ": cannot open for appending: " + std::strerror(errno));
-  size_t done = 0;
-  while (done < text.size()) {
-    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) {
-      const int err = errno;
-      ::close(fd);
-      throw FormatError(path + ": write failed: " + std::strerror(err));
-    }
-    done += static_cast<size_t>(n);
-  }
-  const bool synced = ::fsync(fd) == 0;
-  ::close(fd);
-  if (!synced) throw FormatError(path + ": cannot flush to disk: " + std::strerror(errno));
-}
-
 void syncDir(const std::string& dir) {
   const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (fd >= 0) {
@@ -72,7 +52,7 @@ std::string RunDir::id() const {
 void RunDir::appendSample(const Sample& s, double bar_spread_mm) {
   char spread[32];
   std::snprintf(spread, sizeof spread, ",%.4f\n", bar_spread_mm);
-  appendDurably(file(kSamplesFile), formatSampleRow(s) + spread);
+  appendTextFileDurably(file(kSamplesFile), formatSampleRow(s) + spread);
 }
 
 std::vector<Sample> RunDir::loadSamples() {
@@ -90,8 +70,8 @@ std::vector<Sample> RunDir::loadSamples() {
 void RunDir::logEvent(nlohmann::json event) {
   nlohmann::json line = {{"time", isoNow()}};
   line.update(event);
-  appendDurably(file(kEventsFile),
-                line.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
+  appendTextFileDurably(file(kEventsFile),
+                        line.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
 }
 
 nlohmann::json RunDir::state() const {

@@ -16,5 +16,7 @@ class FormatError : public std::runtime_error {
 std::string readTextFile(const std::string& path);
 // Writes to path.tmp, fsyncs and renames over path, so a crash leaves the old or the new file.
 void writeTextFileAtomic(const std::string& path, const std::string& text);
+// Appends text with one write and fsyncs it: a crash leaves at most a torn last line.
+void appendTextFileDurably(const std::string& path, const std::string& text);
 
 }  // namespace robocal
