@@ -69,7 +69,7 @@ class SvgChart {
              "</text>\n";
   }
   std::string svg() const {
-    return "<svg xmlns='http://www.w3.org/2000/svg' width='800' height='500' "
+    return "<svg xmlns='http://www.w3.org/2000/svg' width='900' height='500' "
            "font-family='sans-serif'>\n"
            "<rect width='900' height='500' fill='white'/>\n" +
            body_ + "</svg>\n";
