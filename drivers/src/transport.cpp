@@ -82,6 +82,8 @@ std::string openAdvice(int err, const std::string& path) {
   }
 }
 
+}  // namespace
+
 speed_t termiosSpeed(int baud) {
   switch (baud) {
     case 300:
@@ -110,8 +112,6 @@ speed_t termiosSpeed(int baud) {
       return 0;
   }
 }
-
-}  // namespace
 
 std::vector<PortInfo> listSerialPorts() {
   sp_port** list = nullptr;

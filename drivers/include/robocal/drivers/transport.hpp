@@ -6,6 +6,8 @@
 // calling thread until the operation completes or its deadline passes.
 #pragma once
 
+#include <termios.h>
+
 #include <robocal/drivers/config.hpp>
 #include <robocal/drivers/errors.hpp>
 
@@ -92,5 +94,8 @@ class SerialLink {
   int sp_fd_ = -1;
   std::array<char, 4096> buffer_{};
 };
+
+// The termios speed constant for a baud rate, or 0 when termios has none for it.
+speed_t termiosSpeed(int baud);
 
 }  // namespace robocal::drivers
