@@ -342,16 +342,23 @@ void SerialLink::write(std::string_view bytes, Clock::time_point deadline) {
                              result = ec;
                              done = true;
                            });
-  if (!runIoUntil(
-          io_, [&] { return done; }, deadline)) {
-    boost::system::error_code ignored;
-    stream_.cancel(ignored);
-    runIoUntil(
-        io_, [&] { return done; }, Clock::now() + std::chrono::seconds(1));
+  if (!finishOrCancel(done, deadline)) {
     throw TimeoutError("could not send to " + describe() +
                        " in time: flow control (RTS/CTS, XON/XOFF) holding the line?");
   }
   if (result) throw disconnected(result.message());
+}
+
+bool SerialLink::finishOrCancel(const bool& done, Clock::time_point deadline) {
+  if (runIoUntil(
+          io_, [&] { return done; }, deadline))
+    return true;
+  // Cancel the operation and let its handler run, so nothing refers to the caller's locals.
+  boost::system::error_code ignored;
+  stream_.cancel(ignored);
+  runIoUntil(
+      io_, [&] { return done; }, Clock::now() + std::chrono::seconds(1));
+  return false;
 }
 
 bool SerialLink::readSome(std::string& out, Clock::time_point deadline) {
@@ -365,12 +372,7 @@ bool SerialLink::readSome(std::string& out, Clock::time_point deadline) {
                             got = n;
                             done = true;
                           });
-  if (!runIoUntil(
-          io_, [&] { return done; }, deadline)) {
-    boost::system::error_code ignored;
-    stream_.cancel(ignored);
-    runIoUntil(
-        io_, [&] { return done; }, Clock::now() + std::chrono::seconds(1));
+  if (!finishOrCancel(done, deadline)) {
     if (!result || result == boost::asio::error::operation_aborted) {
       out.append(buffer_.data(), got);
       return got > 0;

@@ -85,6 +85,9 @@ class SerialLink {
  private:
   void openTermios();
   void openLibserialport();
+  // Runs the io_context until `done` or the deadline; on time-out cancels the pending
+  // operation, waits for its handler, and returns false.
+  bool finishOrCancel(const bool& done, Clock::time_point deadline);
 
   boost::asio::io_context& io_;
   SerialConfig config_;
