@@ -2,7 +2,8 @@
 # Installs what robocal needs to build and test, from Debian 12 packages, when it is missing.
 set -euo pipefail
 packages=(build-essential cmake pkg-config libeigen3-dev libboost-dev libboost-system-dev
-          libserialport-dev libspdlog-dev nlohmann-json3-dev catch2 libsystemd-dev systemd)
+          libserialport-dev libspdlog-dev nlohmann-json3-dev catch2 libsystemd-dev systemd
+          clang libclang-rt-14-dev)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -280,13 +280,17 @@ DriversConfig loadDriversConfig(const std::string& path) {
   if (!in) throw ConfigError(path + ": cannot read the drivers configuration file");
   std::stringstream ss;
   ss << in.rdbuf();
+  return parseDriversConfig(ss.str(), path);
+}
+
+DriversConfig parseDriversConfig(const std::string& text, const std::string& source) {
   json j;
   try {
-    j = json::parse(ss.str());
+    j = json::parse(text);
   } catch (const json::parse_error& e) {
-    throw ConfigError(path + ": not valid JSON: " + e.what());
+    throw ConfigError(source + ": not valid JSON: " + e.what());
   }
-  return driversConfigFromJson(j, path);
+  return driversConfigFromJson(j, source);
 }
 
 json toJson(const SerialConfig& c) {

@@ -93,6 +93,8 @@ SerialConfig serialConfigFromJson(const nlohmann::json& json, const std::string&
 ValConfig valConfigFromJson(const nlohmann::json& json, const std::string& where = "val");
 BarConfig barConfigFromJson(const nlohmann::json& json, const std::string& where = "bar");
 DriversConfig driversConfigFromJson(const nlohmann::json& json, const std::string& source);
+// The text of a drivers configuration file; `source` names it in errors. ConfigError.
+DriversConfig parseDriversConfig(const std::string& text, const std::string& source);
 DriversConfig loadDriversConfig(const std::string& path);
 // Checks values (regexes compile, templates name known fields, numbers in range); ConfigError.
 void validate(const ValConfig& config, const std::string& where = "val");

@@ -1,0 +1,30 @@
+// The plan file (docs/plan-format.md), which robocal and robocald load from disk or a client's
+// path. parsePlan returns a Plan or throws FormatError. Property: the plan written back
+// (formatPlan) parses to the same plan; the writer rounds to 1e-9, so numbers compare to that.
+#include "fuzz_common.hpp"
+
+#include <robocal/planner/plan_json.hpp>
+
+using namespace robocal;
+using robocal::fuzz::check;
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  return robocal::fuzz::guarded(data, size, [](const std::string& text) {
+    Plan plan;
+    try {
+      plan = parsePlan(text, "fuzz.json");
+    } catch (const FormatError&) {
+      return;
+    }
+    const std::string written = formatPlan(plan);
+    Plan again;
+    try {
+      again = parsePlan(written, "written");
+    } catch (const FormatError& e) {
+      robocal::fuzz::fail("written plan does not parse", e.what() + ("\n" + written));
+    }
+    std::string path = "plan";
+    check(robocal::fuzz::sameJson(planToJson(plan), planToJson(again), 1e-9, 1e-12, path),
+          "plan changed on a round trip", path);
+  });
+}
