@@ -19,6 +19,7 @@
 #include <cmath>
 #include <filesystem>
 #include <future>
+#include <map>
 #include <numbers>
 #include <set>
 
@@ -55,6 +56,34 @@ JointsDeg fromDriver(const drivers::Joints6& q) {
 std::int64_t monotonicMicros(Clock::time_point t) {
   return std::chrono::duration_cast<std::chrono::microseconds>(t.time_since_epoch()).count();
 }
+
+Clock::duration fromSeconds(double seconds) {
+  return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
+}
+
+// One data point's timing, from the end of its move: the dwell (settle) until the bar window
+// opens, and the way to the sample's fsync. Logged as a "timing" event in the run's event log
+// (`robocal run-timing` summarises them; docs/reliability.md, dwell timing).
+struct PointTiming {
+  Clock::time_point motion_complete, dwell_end, where_start, bar_window_start, sample_on_disk;
+
+  static double msBetween(Clock::time_point from, Clock::time_point to) {
+    return std::round(std::chrono::duration<double, std::milli>(to - from).count() * 1e3) / 1e3;
+  }
+  nlohmann::json toEvent(int shell, double lat_deg, double lon_deg, double settle_s) const {
+    const double settle_achieved_ms = msBetween(motion_complete, bar_window_start);
+    return {{"event", "timing"},
+            {"shell", shell},
+            {"lat_deg", lat_deg},
+            {"lon_deg", lon_deg},
+            {"settle_s", settle_s},
+            {"settle_achieved_ms", settle_achieved_ms},
+            {"settle_error_ms", std::round((settle_achieved_ms - settle_s * 1e3) * 1e3) / 1e3},
+            {"dwell_ms", msBetween(motion_complete, dwell_end)},
+            {"where_ms", msBetween(where_start, bar_window_start)},
+            {"motion_to_disk_ms", msBetween(motion_complete, sample_on_disk)}};
+  }
+};
 
 // A data point of a shell, as the samples file identifies it.
 std::pair<double, double> pointKey(double lat_deg, double lon_deg) {
@@ -209,11 +238,15 @@ struct RunController::Impl {
 
   // Runs the driver loop for a while (bar lines arrive), checking stop requests.
   void spin(double seconds, bool watch_bar) {
-    const auto until = Clock::now() + std::chrono::duration<double>(seconds);
-    while (Clock::now() < until) {
+    spinUntil(Clock::now() + fromSeconds(seconds), watch_bar);
+  }
+  // The same until a deadline, which it does not overshoot by more than the event loop's wake-up
+  // (each slice ends at the deadline, not 10 ms after the last check).
+  void spinUntil(Clock::time_point until, bool watch_bar) {
+    for (auto now = Clock::now(); now < until; now = Clock::now()) {
       checkpoint();
       io.restart();
-      io.run_for(std::chrono::milliseconds(10));
+      io.run_until(std::min(until, now + std::chrono::milliseconds(10)));
       if (watch_bar) watchBar(false);
     }
   }
@@ -246,6 +279,37 @@ struct RunController::Impl {
           if (bar_attached) watchBar(recentre);
         });
     return fromDriver(w.joints_deg);
+  }
+
+  // Faults the drivers absorb (a garbled or cut-off bar line, a WHERE asked again) leave no pause
+  // behind: the growth of the drivers' fault counters goes to the event log as "link_faults".
+  std::map<std::string, long> linkFaultCounts() const {
+    std::map<std::string, long> c;
+    if (bar) {
+      const drivers::BarStats& b = bar->stats();
+      c["bar_garbage_lines"] = b.garbage_lines;
+      c["bar_partial_lines"] = b.partial_lines;
+      c["bar_timeouts"] = b.timeouts;
+      c["bar_disconnects"] = b.disconnects;
+      c["bar_device_errors"] = b.device_errors;
+    }
+    if (val) {
+      const drivers::ValStats& v = val->stats();
+      c["val_timeouts"] = v.timeouts;
+      c["val_controller_errors"] = v.controller_errors;
+      c["val_where_retries"] = v.where_retries;
+      c["val_unsolicited_lines"] = v.unsolicited_lines;
+    }
+    return c;
+  }
+  std::map<std::string, long> link_faults_reported;  // run thread only
+  void reportLinkFaults(RunDir& dir) {
+    const std::map<std::string, long> now = linkFaultCounts();
+    json ev = {{"event", "link_faults"}};
+    for (const auto& [name, count] : now)
+      if (count > link_faults_reported[name]) ev[name] = count - link_faults_reported[name];
+    link_faults_reported = now;
+    if (ev.size() > 1) event(dir, ev);
   }
 
   void stopRobot() {
@@ -454,13 +518,16 @@ struct RunController::Impl {
     JointsDeg joints_deg;
     double deflection_mm, spread_mm;
     std::size_t readings;
+    Clock::time_point where_start, bar_window_start;
   };
   // The actual joints (WHERE) and the bar averaged over bar_window_s, watched.
   Measurement measureHere() {
     Measurement m;
+    m.where_start = Clock::now();
     m.joints_deg = fromDriver(val->where().joints_deg);
     window.clear();
     collecting = true;
+    m.bar_window_start = Clock::now();
     spin(config.bar_window_s, true);
     const auto deadline =
         Clock::now() + std::chrono::duration<double>(config.drivers.bar.stale_after_s);
@@ -499,7 +566,10 @@ struct RunController::Impl {
     updateProgress(done_at_start, total, started, done_at_start);
 
     bool bar_maybe_attached = resuming;
+    // Re-plan files are numbered on from those of the run's earlier sessions (before a resume).
     int replans = 0;
+    while (std::filesystem::exists(dir.file("replans/" + std::to_string(replans + 1) + ".json")))
+      ++replans;
     std::optional<Model> refined;
     // The centring fit also uses measurements that are not data points (at the connect pose,
     // after corrective moves): they tell the model's error where the robot is about to go.
@@ -652,15 +722,23 @@ struct RunController::Impl {
           continue;
         }
         if (step.kind == StepKind::kPoint) {
-          const auto motion_end = Clock::now();
-          spin(config.settle_s, true);
-          const double dwell_s = std::chrono::duration<double>(Clock::now() - motion_end).count();
+          PointTiming timing;
+          const auto motion_end = timing.motion_complete = Clock::now();
+          spinUntil(motion_end + fromSeconds(config.settle_s), true);
+          timing.dwell_end = Clock::now();
+          const double dwell_s =
+              std::chrono::duration<double>(timing.dwell_end - motion_end).count();
           const Measurement m = measureHere();
           const JointsDeg actual = m.joints_deg;
           Sample s = shellSample(m);
           s.lat_deg = step.lat_deg;
           s.lon_deg = step.lon_deg;
           dir.appendSample(s, m.spread_mm);  // on disk before the robot moves again
+          timing.sample_on_disk = Clock::now();
+          timing.where_start = m.where_start;
+          timing.bar_window_start = m.bar_window_start;
+          dir.logEvent(timing.toEvent(s.shell, s.lat_deg, s.lon_deg, config.settle_s));
+          reportLinkFaults(dir);
           samples.push_back(s);
           centring.push_back(s);
           const auto [lat, lon] = pointKey(s.lat_deg, s.lon_deg);
@@ -755,6 +833,7 @@ struct RunController::Impl {
       }
       ensureDevices(true);
       runShells(*dir, plan, job.kind == Job::kResume);
+      reportLinkFaults(*dir);
       dir->setState({{"status", "done"}});
       dir->logEvent({{"event", "done"}});
       setState("solving", "waiting for the last fit");
@@ -783,6 +862,7 @@ struct RunController::Impl {
     const std::string status = aborted ? "aborted" : "paused";
     if (dir) {
       try {
+        reportLinkFaults(*dir);
         dir->setState({{"status", status}, {"reason", stop.reason}});
         dir->logEvent({{"event", status}, {"reason", stop.reason}});
       } catch (const std::exception& e) {

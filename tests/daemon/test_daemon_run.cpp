@@ -247,4 +247,50 @@ TEST_CASE("faults mid-run stop the robot, pause the run and lose nothing", "[e2e
     }
   }
   CHECK(cell.operate(*c, {"done", "paused", "error"}, 240) == "done");
+  // Each resume re-plans: every re-plan has its own file (a resume once overwrote replans/1.json).
+  const json st = c->request({{"cmd", "status"}}, 10, "STATUS");
+  std::ifstream events(cell.runDir(st["run"]) + "/events.jsonl");
+  std::set<std::string> replan_files;
+  int replans = 0;
+  for (std::string line; std::getline(events, line);) {
+    const json e = json::parse(line);
+    if (e["event"] == "replan") {
+      ++replans;
+      replan_files.insert(e["file"].get<std::string>());
+    }
+  }
+  CHECK(replans >= 3);
+  CHECK(static_cast<int>(replan_files.size()) == replans);
+}
+
+TEST_CASE("faults the drivers absorb reach the event log, and each point logs its timing",
+          "[e2e]") {
+  Cell cell({"B1C1"}, 17, true, 60);
+  auto c = cell.daemon->client();
+  c->send({{"cmd", "watch"}, {"enable", true}});
+  REQUIRE(c->request({{"cmd", "start"}, {"token", cell.daemon->token()}}, 30, "ACK")["class"] ==
+          "ACK");
+  cell.operate(*c, {"measuring"}, 60);
+  // A garbled bar line is skipped by the reader: the run goes on, and the event log says so.
+  REQUIRE_THAT(cell.sim->control("fault garbage"), Contains("ok"));
+  REQUIRE(cell.operate(*c, {"done", "paused", "error"}, 240) == "done");
+  const json st = c->request({{"cmd", "status"}}, 10, "STATUS");
+  const auto samples = loadSamplesFile(cell.runDir(st["run"]) + "/samples.csv");
+  std::ifstream events(cell.runDir(st["run"]) + "/events.jsonl");
+  std::size_t timings = 0;
+  long bar_faults = 0;
+  for (std::string line; std::getline(events, line);) {
+    const json e = json::parse(line);
+    if (e["event"] == "timing") {
+      ++timings;
+      CHECK(e["settle_s"] == 0.02);
+      for (const char* name : {"settle_achieved_ms", "settle_error_ms", "motion_to_disk_ms"})
+        CHECK(e.contains(name));
+    }
+    if (e["event"] == "link_faults")
+      for (const char* name : {"bar_garbage_lines", "bar_partial_lines"})
+        bar_faults += e.value(name, 0L);
+  }
+  CHECK(timings == samples.size());
+  CHECK(bar_faults >= 1);
 }
