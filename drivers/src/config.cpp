@@ -287,7 +287,7 @@ DriversConfig parseDriversConfig(const std::string& text, const std::string& sou
   json j;
   try {
     j = json::parse(text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // syntax errors, and numbers too large for a double
     throw ConfigError(source + ": not valid JSON: " + e.what());
   }
   return driversConfigFromJson(j, source);

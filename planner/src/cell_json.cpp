@@ -179,7 +179,7 @@ CellConfig parseCell(const std::string& text, const std::string& source) {
   json j;
   try {
     j = json::parse(text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // syntax errors, and numbers too large for a double
     throw FormatError(source + ": not valid JSON: " + e.what());
   }
   return cellFromJson(j, source);

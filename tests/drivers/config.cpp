@@ -57,3 +57,14 @@ TEST_CASE("Config: errors name the key", "[drivers][config]") {
              Catch::Contains("val.serial.parity"));
   CHECK_THAT(errorOf(R"([1, 2])"), Catch::Contains("cell.json"));
 }
+
+TEST_CASE("Config: a number too large for a double is a ConfigError (found by fuzz_drivers_config)",
+          "[drivers][config]") {
+  // nlohmann::json reports it as out_of_range, not parse_error: it used to escape as that.
+  try {
+    parseDriversConfig(R"({"val": {"serial": {"baud": 9601e308}}})", "drivers.json");
+    FAIL("no error");
+  } catch (const ConfigError& e) {
+    CHECK_THAT(e.what(), Catch::Contains("drivers.json: not valid JSON"));
+  }
+}

@@ -64,5 +64,8 @@ TEST_CASE("bad cell files give an error naming the key") {
   CHECK(errorOf(R"({"grid": {"latitude_last_deg": 90}})").find("grid.latitude_last_deg") !=
         std::string::npos);
   CHECK(errorOf("{not json").find("not valid JSON") != std::string::npos);
+  // Found by fuzz_cell: a number too large for a double escaped as json::out_of_range.
+  CHECK(errorOf(R"({"bar": {"nominal_length_mm": 1e30830}})").find("not valid JSON") !=
+        std::string::npos);
   CHECK(errorOf("[]").find("top level") != std::string::npos);
 }
