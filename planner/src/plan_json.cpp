@@ -11,8 +11,10 @@ using nlohmann::json;
 using nlohmann::ordered_json;
 
 // Rounds to 1e-9 so that files stay readable; joints keep far more precision than the robot.
+// Values too large to scale (which need no rounding) stay as they are, not infinity (null).
 double tidy(double v) {
-  return std::round(v * 1e9) / 1e9 + 0.0;
+  const double rounded = std::round(v * 1e9) / 1e9 + 0.0;
+  return std::isfinite(rounded) ? rounded : v;
 }
 
 ordered_json stepToJson(const PlanStep& s) {
@@ -80,6 +82,15 @@ class Reader {
     s.lat_deg = number(j, where, "lat_deg");
     s.lon_deg = number(j, where, "lon_deg");
     return s;
+  }
+  // An optional count of a summary (points, rank): a whole number from 0 to 1e9, else fallback
+  // when absent.
+  int count(const json& obj, const std::string& where, const char* key, int fallback) const {
+    if (!obj.contains(key)) return fallback;
+    const double v = number(obj, where, key);
+    if (v != std::floor(v) || v < 0 || v > 1e9)
+      fail(where.empty() ? key : where + "." + key, "expected a whole number from 0");
+    return static_cast<int>(v);
   }
   const std::string& source() const { return source_; }
 
@@ -188,7 +199,8 @@ Plan planFromJson(const json& root, const std::string& source) {
     const json& o = shells[i];
     ShellPlan sh;
     const double number = r.number(o, where, "shell");
-    if (number != std::floor(number) || number < 1) r.fail(where + ".shell", "expected 1, 2, ...");
+    if (number != std::floor(number) || number < 1 || number > 1e6)
+      r.fail(where + ".shell", "expected 1, 2, ... (at most 1000000)");
     sh.shell = static_cast<int>(number);
     try {
       const auto c = parseConnections(r.string(o, where, "connection"));
@@ -221,8 +233,8 @@ Plan planFromJson(const json& root, const std::string& source) {
       }
     if (o.contains("summary") && o["summary"].is_object()) {
       const json& ss = o["summary"];
-      sh.summary.points = ss.value("points", 0);
-      sh.summary.vias = ss.value("vias", 0);
+      sh.summary.points = r.count(ss, where + ".summary", "points", 0);
+      sh.summary.vias = r.count(ss, where + ".summary", "vias", 0);
       sh.summary.duration_s = ss.value("duration_s", 0.0);
       sh.summary.max_deviation_mm = ss.value("max_deviation_mm", 0.0);
       sh.summary.predicted_deflection_mm = ss.value("predicted_deflection_mm", -1.0);
@@ -233,8 +245,8 @@ Plan planFromJson(const json& root, const std::string& source) {
   summarizePlan(plan);
   if (root.contains("summary") && root["summary"].is_object()) {
     const json& s = root["summary"];
-    plan.summary.rank = s.value("rank", 0);
-    plan.summary.expected_rank = s.value("expected_rank", 36);
+    plan.summary.rank = r.count(s, "summary", "rank", 0);
+    plan.summary.expected_rank = r.count(s, "summary", "expected_rank", 36);
     plan.summary.condition_number = s.value("condition_number", 0.0);
   }
   return plan;
@@ -244,7 +256,7 @@ Plan parsePlan(const std::string& text, const std::string& source) {
   json j;
   try {
     j = json::parse(text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // syntax errors, and numbers too large for a double
     throw FormatError(source + ": not valid JSON: " + e.what());
   }
   try {

@@ -456,3 +456,46 @@ TEST_CASE("the flange and the wrist centre keep their distance from the bar") {
     found |= v.step == 0 && v.rule == "bar clearance";
   CHECK(found);
 }
+
+namespace {
+
+// A one-shell plan file with `shell`, the shell's `points` and its step's `lat_deg` as given.
+std::string tinyPlan(const std::string& shell, const std::string& points,
+                     const std::string& lat_deg) {
+  return R"({"format": "robocal-plan", "version": 1, "settings": {}, "shells": [{"shell": )" +
+         shell + R"(, "connection": "B1C1", "extension_mm": 0, "radius_mm": 150,
+         "arm_configuration": "right-up-noflip", "summary": {"points": )" +
+         points + R"(, "vias": 0},
+         "connect": {"joints_deg": [0, -90, 90, 0, 45, 0], "lat_deg": 90, "lon_deg": 0},
+         "steps": [{"kind": "point", "joints_deg": [0, -80, 90, 0, 45, 0], "lat_deg": )" +
+         lat_deg + R"(, "lon_deg": 0}]}]})";
+}
+
+std::string planErrorOf(const std::string& text) {
+  try {
+    parsePlan(text, "plan.json");
+  } catch (const FormatError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST_CASE("hostile plan files are a FormatError and written plans read back (found by fuzz_plan)") {
+  CHECK(planErrorOf(tinyPlan("1", "1", "10")).empty());
+  // A number too large for a double escaped as json::out_of_range.
+  CHECK_THAT(planErrorOf(tinyPlan("1", "1", "-212.4165311e30838")),
+             Catch::Contains("plan.json: not valid JSON"));
+  // Numbers too large for an int were converted anyway (undefined behaviour).
+  CHECK_THAT(planErrorOf(tinyPlan("1e300", "1", "10")), Catch::Contains("shells[0].shell"));
+  CHECK_THAT(planErrorOf(tinyPlan("1", "1e300", "10")),
+             Catch::Contains("shells[0].summary.points"));
+  CHECK_THAT(planErrorOf(tinyPlan("1", "-2", "10")), Catch::Contains("shells[0].summary.points"));
+  // A huge but finite angle was written as null (rounding overflowed to infinity).
+  const Plan plan = parsePlan(tinyPlan("1", "1", "1e300"), "plan.json");
+  const Plan back = parsePlan(formatPlan(plan), "written");
+  REQUIRE(back.shells.size() == 1);
+  REQUIRE(back.shells[0].steps.size() == 1);
+  CHECK(back.shells[0].steps[0].lat_deg == 1e300);
+}
