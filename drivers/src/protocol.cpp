@@ -251,6 +251,7 @@ std::string ValDialect::speedCommand(double percent) const {
 }
 
 std::optional<std::string> ValDialect::errorMessage(const std::string& line) const {
+  if (line.size() > kMaxRegexLineBytes) return std::nullopt;
   std::smatch m;
   if (!std::regex_match(line, m, error_re_)) return std::nullopt;
   std::string msg = trim(m[1].str());
@@ -485,7 +486,7 @@ BarDialect::BarDialect(BarConfig config)
 
 BarLine BarDialect::parse(const std::string& line) const {
   BarLine out;
-  if (!isPrintableText(line) || trim(line).empty()) return out;
+  if (line.size() > kMaxRegexLineBytes || !isPrintableText(line) || trim(line).empty()) return out;
   std::smatch m;
   if (std::regex_search(line, no_probe_re_)) {
     out.kind = BarLineKind::kNoProbe;

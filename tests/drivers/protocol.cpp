@@ -123,3 +123,19 @@ TEST_CASE("Bar lines: the simulator's formats parse back", "[drivers][protocol]"
     CHECK(d.parse("").kind == BarLineKind::kGarbage);
   }
 }
+
+TEST_CASE("Very long lines are not matched against the dialect's regexes", "[drivers][protocol]") {
+  // Found with the fuzz harnesses' inputs made long: std::regex recursed once per character and
+  // a 100 KB line overflowed the stack (the bar driver cuts lines at 1.3 KB, the VAL collector
+  // did not cut them at all).
+  const ValDialect val{ValConfig{}};
+  ValReplyCollector c(val, "WHERE");
+  CHECK(c.feed("WHERE\r\n*" + std::string(1000000, 'a') + "*\r\n*Arm power off*\r\n."));
+  CHECK(c.errors() == std::vector<std::string>{"Arm power off"});
+  CHECK(c.lines().size() == 1);
+  CHECK(val.errorMessage("*" + std::string(kMaxRegexLineBytes - 2, 'a') + "*"));
+
+  const BarDialect bar{BarConfig{}};
+  CHECK(bar.parse(std::string(1000000, '1') + " MM").kind == BarLineKind::kGarbage);
+  CHECK(bar.parse(std::string(1000, ' ') + "+1.5 MM").value_mm == 1.5);
+}

@@ -47,6 +47,10 @@ bool looksLikeText(std::string_view bytes);
 std::string escapeBytes(std::string_view bytes);
 // Inverse of escapeBytes (also accepts \\): used for transcripts and line endings in configs.
 std::string unescapeBytes(std::string_view text);
+// Lines longer than this are never matched against a dialect's regular expressions: no device
+// line is that long, and std::regex recurses once per character (a 100 KB line overflowed the
+// stack). They are neither VAL error lines nor bar readings or statuses (kGarbage).
+inline constexpr std::size_t kMaxRegexLineBytes = 4096;
 // Parses a whole token as a decimal number ("+1.5", "-.25", "12."); nullopt otherwise.
 std::optional<double> parseNumber(std::string_view token);
 std::string formatFixed(double value, int decimals);
