@@ -12,6 +12,14 @@ const char* typeName(const json& j) {
   return j.type_name();
 }
 
+// A value for an error message: a number or a string as written, an array or object by its size
+// (dumping a deeply nested value recursed once per level and overflowed the stack).
+std::string describe(const json& j) {
+  if (j.is_array()) return "an array of " + std::to_string(j.size());
+  if (j.is_object()) return "an object";
+  return j.dump();
+}
+
 class Reader {
  public:
   explicit Reader(std::string source) : source_(std::move(source)) {}
@@ -53,7 +61,7 @@ class Reader {
 
   Eigen::Vector3d point(const json& value, const std::string& path) const {
     if (!value.is_array() || value.size() != 3)
-      fail(path, "expected [x, y, z] in mm, got " + value.dump());
+      fail(path, "expected [x, y, z] in mm, got " + describe(value));
     return {numberValue(value[0], path + "[0]"), numberValue(value[1], path + "[1]"),
             numberValue(value[2], path + "[2]")};
   }

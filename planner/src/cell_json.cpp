@@ -27,7 +27,8 @@ class Reader {
   }
 
   int integer(const json& v, const std::string& key) const {
-    if (!v.is_number_integer()) fail(key, std::string("expected an integer, got ") + v.dump());
+    if (!v.is_number_integer())  // no dump() of an array or object: it recurses per level
+      fail(key, "expected an integer, got " + (v.is_structured() ? v.type_name() : v.dump()));
     const auto i = v.get<long long>();
     if (i < -1000000000LL || i > 1000000000LL) fail(key, "out of range");
     return static_cast<int>(i);

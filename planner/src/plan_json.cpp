@@ -62,9 +62,11 @@ class Reader {
            std::string("expected a string, got ") + v.type_name());
     return v.get<std::string>();
   }
-  PlanStep step(const json& j, const std::string& where) const {
+  // A step; the connect pose has no "kind" (it is a point). No copy of `j` is made: copying a
+  // deeply nested value recursed once per level and overflowed the stack.
+  PlanStep step(const json& j, const std::string& where, bool has_kind = true) const {
     PlanStep s;
-    const std::string kind = string(j, where, "kind");
+    const std::string kind = has_kind ? string(j, where, "kind") : "point";
     if (kind == "point") {
       s.kind = StepKind::kPoint;
     } else if (kind == "via") {
@@ -189,7 +191,8 @@ Plan planFromJson(const json& root, const std::string& source) {
     r.fail("format", std::string("expected \"") + kPlanFormat + "\"");
   const json& version = r.member(root, "", "version");
   if (!version.is_number_integer() || version.get<int>() != kPlanFormatVersion)
-    r.fail("version", "expected " + std::to_string(kPlanFormatVersion) + ", got " + version.dump());
+    r.fail("version", "expected " + std::to_string(kPlanFormatVersion) + ", got " +
+                          (version.is_structured() ? version.type_name() : version.dump()));
   Plan plan;
   if (root.contains("model") && root["model"].is_string()) plan.model_name = root["model"];
   plan.cell = cellFromJson(r.member(root, "", "settings"), source + ": settings");
@@ -215,10 +218,7 @@ Plan planFromJson(const json& root, const std::string& source) {
     const auto parsed = parseArmConfig(config);
     if (!parsed) r.fail(where + ".arm_configuration", "unknown configuration \"" + config + "\"");
     sh.config = *parsed;
-    const json& connect = r.member(o, where, "connect");
-    json connect_step = connect;
-    if (connect_step.is_object()) connect_step["kind"] = "point";
-    sh.connect = r.step(connect_step, where + ".connect");
+    sh.connect = r.step(r.member(o, where, "connect"), where + ".connect", false);
     const json& steps = r.array(o, where, "steps");
     for (size_t k = 0; k < steps.size(); ++k)
       sh.steps.push_back(r.step(steps[k], where + ".steps[" + std::to_string(k) + "]"));

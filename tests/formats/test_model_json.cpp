@@ -71,6 +71,21 @@ TEST_CASE("bad model files name the key and the problem") {
                     Contains("m.json: links[0].x: not a finite number"));
 }
 
+TEST_CASE("a deeply nested value in an error is described, not dumped (found with fuzz_model)") {
+  // The message dumped the value: 200000 levels of arrays overflowed the stack.
+  const std::string deep = std::string(200000, '[') + std::string(200000, ']');
+  std::string text = edited([](auto& j) { j["balls"][1] = "deep"; });
+  text.replace(text.find("\"deep\""), 6, deep);
+  CHECK_THROWS_WITH(parseModel(text, "m.json"),
+                    Contains("balls[1]: expected [x, y, z] in mm, got an array of 1"));
+  CHECK_THROWS_WITH(parseModel(edited([](auto& j) {
+                      j["balls"][1] = {1, 2};
+                    })),
+                    Contains("got an array of 2"));
+  CHECK_THROWS_WITH(parseModel(edited([](auto& j) { j["balls"][1] = "here"; })),
+                    Contains("got \"here\""));
+}
+
 TEST_CASE("reading a missing file says which file") {
   CHECK_THROWS_WITH(loadModelFile("/nonexistent/model.json"),
                     Contains("/nonexistent/model.json: cannot open"));

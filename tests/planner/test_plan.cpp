@@ -492,6 +492,18 @@ TEST_CASE("hostile plan files are a FormatError and written plans read back (fou
   CHECK_THAT(planErrorOf(tinyPlan("1", "1e300", "10")),
              Catch::Contains("shells[0].summary.points"));
   CHECK_THAT(planErrorOf(tinyPlan("1", "-2", "10")), Catch::Contains("shells[0].summary.points"));
+  // Deeply nested values were copied (the connect pose) or dumped (the version) recursively,
+  // one level per call: 200000 levels overflowed the stack.
+  const std::string deep = std::string(200000, '[') + std::string(200000, ']');
+  std::string text = tinyPlan("1", "1", "10");
+  const std::string connect =
+      R"({"joints_deg": [0, -90, 90, 0, 45, 0], "lat_deg": 90, "lon_deg": 0})";
+  REQUIRE(text.find(connect) != std::string::npos);
+  text.replace(text.find(connect), connect.size(), deep);
+  CHECK_THAT(planErrorOf(text), Catch::Contains("shells[0].connect: expected an object"));
+  std::string version = tinyPlan("1", "1", "10");
+  version.replace(version.find("\"version\": 1"), 12, "\"version\": " + deep);
+  CHECK_THAT(planErrorOf(version), Catch::Contains("version: expected 1, got array"));
   // A huge but finite angle was written as null (rounding overflowed to infinity).
   const Plan plan = parsePlan(tinyPlan("1", "1", "1e300"), "plan.json");
   const Plan back = parsePlan(formatPlan(plan), "written");
