@@ -21,8 +21,9 @@ constexpr const char* kHelp = R"(usage: robocal run-timing RUN_DIR [--json]
 
 Summarises the dwell timing robocald logged for each data point of a run (RUN_DIR/events.jsonl,
 "timing" events): the achieved settle time (motion complete to the bar window's start) against
-the configured settle_s, and the time from motion complete to the sample fsynced on disk.
-Prints count, p50, p99 and max of each (ms). Exits 1 when the run has no timing events.
+the configured settle_s, the controller's WHERE within the window, and the time from motion
+complete to the sample fsynced on disk. Prints min, p50, p99 and max of each (ms). Exits 1 when
+the run has no timing events.
 
   --json    one JSON object instead of the table
 )";
@@ -44,8 +45,8 @@ int run(const std::vector<std::string>& argv) {
   const std::string path = args.positional()[0] + "/events.jsonl";
   std::istringstream in(readTextFile(path));
   // Quantities by name, in ms; settle_s values seen.
-  const std::vector<std::string> names = {"settle_error_ms", "settle_achieved_ms", "dwell_ms",
-                                          "where_ms", "motion_to_disk_ms"};
+  const std::vector<std::string> names = {"settle_error_ms", "settle_achieved_ms", "where_ms",
+                                          "motion_to_disk_ms"};
   std::map<std::string, std::vector<double>> values_ms;
   std::map<double, int> settle_s_seen;
   int line_number = 0;

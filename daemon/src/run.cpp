@@ -65,7 +65,7 @@ Clock::duration fromSeconds(double seconds) {
 // opens, and the way to the sample's fsync. Logged as a "timing" event in the run's event log
 // (`robocal run-timing` summarises them; docs/reliability.md, dwell timing).
 struct PointTiming {
-  Clock::time_point motion_complete, dwell_end, where_start, bar_window_start, sample_on_disk;
+  Clock::time_point motion_complete, bar_window_start, where_end, sample_on_disk;
 
   static double msBetween(Clock::time_point from, Clock::time_point to) {
     return std::round(std::chrono::duration<double, std::milli>(to - from).count() * 1e3) / 1e3;
@@ -79,8 +79,7 @@ struct PointTiming {
             {"settle_s", settle_s},
             {"settle_achieved_ms", settle_achieved_ms},
             {"settle_error_ms", std::round((settle_achieved_ms - settle_s * 1e3) * 1e3) / 1e3},
-            {"dwell_ms", msBetween(motion_complete, dwell_end)},
-            {"where_ms", msBetween(where_start, bar_window_start)},
+            {"where_ms", msBetween(bar_window_start, where_end)},
             {"motion_to_disk_ms", msBetween(motion_complete, sample_on_disk)}};
   }
 };
@@ -518,17 +517,23 @@ struct RunController::Impl {
     JointsDeg joints_deg;
     double deflection_mm, spread_mm;
     std::size_t readings;
-    Clock::time_point where_start, bar_window_start;
+    Clock::time_point bar_window_start, where_end;
   };
-  // The actual joints (WHERE) and the bar averaged over bar_window_s, watched.
+  // The bar averaged over bar_window_s and the actual joints (WHERE) read within that window,
+  // watched. The window opens at once: the controller's answer does not delay it.
   Measurement measureHere() {
+    struct Collecting {  // also when a fault ends the window early: nothing collects while idle
+      bool& flag;
+      explicit Collecting(bool& f) : flag(f) { flag = true; }
+      ~Collecting() { flag = false; }
+    };
     Measurement m;
-    m.where_start = Clock::now();
-    m.joints_deg = fromDriver(val->where().joints_deg);
     window.clear();
-    collecting = true;
+    const Collecting collect(collecting);
     m.bar_window_start = Clock::now();
-    spin(config.bar_window_s, true);
+    m.joints_deg = fromDriver(val->where().joints_deg);
+    m.where_end = Clock::now();
+    spinUntil(m.bar_window_start + fromSeconds(config.bar_window_s), true);
     const auto deadline =
         Clock::now() + std::chrono::duration<double>(config.drivers.bar.stale_after_s);
     while (window.empty() && Clock::now() < deadline) spin(0.02, true);
@@ -725,18 +730,17 @@ struct RunController::Impl {
           PointTiming timing;
           const auto motion_end = timing.motion_complete = Clock::now();
           spinUntil(motion_end + fromSeconds(config.settle_s), true);
-          timing.dwell_end = Clock::now();
-          const double dwell_s =
-              std::chrono::duration<double>(timing.dwell_end - motion_end).count();
           const Measurement m = measureHere();
+          const double dwell_s =
+              std::chrono::duration<double>(m.bar_window_start - motion_end).count();
           const JointsDeg actual = m.joints_deg;
           Sample s = shellSample(m);
           s.lat_deg = step.lat_deg;
           s.lon_deg = step.lon_deg;
           dir.appendSample(s, m.spread_mm);  // on disk before the robot moves again
           timing.sample_on_disk = Clock::now();
-          timing.where_start = m.where_start;
           timing.bar_window_start = m.bar_window_start;
+          timing.where_end = m.where_end;
           dir.logEvent(timing.toEvent(s.shell, s.lat_deg, s.lon_deg, config.settle_s));
           reportLinkFaults(dir);
           samples.push_back(s);
