@@ -5,7 +5,14 @@
 #include <spdlog/spdlog.h>
 #include <boost/asio/write.hpp>
 
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <sys/socket.h>
+
 #include <array>
+#include <cerrno>
+#include <cstring>
+#include <vector>
 
 namespace robocal::daemon {
 
@@ -23,6 +30,7 @@ struct ClientHub::Client {
   bool discarding = false;  // inside a line that was too long
   bool watching = false;
   bool writing = false;
+  std::size_t in_flight = 0;  // queued lines the pending write covers
   bool closed = false;
   std::deque<std::string> queue;
   Clock::time_point last_progress = Clock::now();
@@ -75,6 +83,7 @@ void ClientHub::accept() {
       } else {
         c->id = next_id_++;
         clients_[c->id] = c;
+        configureSocket(c->socket);
         spdlog::info("client {} connected from {}", c->id, c->peer);
         enqueue(c, proto::frame(greeting_()), false);
         read(c);
@@ -84,6 +93,20 @@ void ClientHub::accept() {
     }
     accept();
   });
+}
+
+void ClientHub::configureSocket(tcp::socket& socket) const {
+  // Lines go out as they come: no Nagle (with the reader's delayed ACKs it held a reading back
+  // up to 40 ms).
+  boost::system::error_code ec;
+  socket.set_option(tcp::no_delay(true), ec);
+  if (ec) spdlog::warn("TCP_NODELAY: {}", ec.message());
+#ifdef TCP_NOTSENT_LOWAT
+  const int unsent_max_bytes = limits_.unsent_max_bytes;
+  if (::setsockopt(socket.native_handle(), IPPROTO_TCP, TCP_NOTSENT_LOWAT, &unsent_max_bytes,
+                   sizeof unsent_max_bytes) != 0)
+    spdlog::warn("TCP_NOTSENT_LOWAT: {}", std::strerror(errno));
+#endif
 }
 
 void ClientHub::read(const std::shared_ptr<Client>& c) {
@@ -164,7 +187,18 @@ void ClientHub::enqueue(const std::shared_ptr<Client>& c, std::string line, bool
 void ClientHub::write(const std::shared_ptr<Client>& c) {
   if (c->queue.empty() || c->closed) return;
   c->writing = true;
-  asio::async_write(c->socket, asio::buffer(c->queue.front()),
+  // Everything queued (up to a limit) in one write: a client that fell behind catches up with
+  // few system calls. Deque elements stay put while more are pushed at the back.
+  constexpr std::size_t kMaxLines = 64, kMaxBytes = 64 * 1024;
+  std::vector<asio::const_buffer> buffers;
+  std::size_t bytes = 0;
+  for (const std::string& line : c->queue) {
+    if (buffers.size() == kMaxLines || (!buffers.empty() && bytes + line.size() > kMaxBytes)) break;
+    buffers.push_back(asio::buffer(line));
+    bytes += line.size();
+  }
+  c->in_flight = buffers.size();
+  asio::async_write(c->socket, buffers,
                     [this, c](const boost::system::error_code& ec, std::size_t) {
                       c->writing = false;
                       if (c->closed) return;
@@ -172,7 +206,9 @@ void ClientHub::write(const std::shared_ptr<Client>& c) {
                         close(c, ec.message());
                         return;
                       }
-                      c->queue.pop_front();
+                      c->queue.erase(c->queue.begin(),
+                                     c->queue.begin() + static_cast<std::ptrdiff_t>(c->in_flight));
+                      c->in_flight = 0;
                       c->last_progress = Clock::now();
                       write(c);
                     });

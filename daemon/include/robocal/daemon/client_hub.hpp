@@ -23,6 +23,10 @@ struct HubLimits {
   std::size_t max_line_bytes = 16 * 1024;
   std::size_t queue_max = 4096;  // queued lines per client; past it droppable lines are dropped
   double stall_s = 5.0;          // queued data and no write progress this long: disconnect
+  // TCP_NOTSENT_LOWAT of each client socket: the kernel takes at most this much more than what
+  // is in flight, so a client whose window has closed is seen as stalled (its queue stops moving)
+  // after ~this many bytes rather than after the kernel's auto-tuned send buffer (MBs) fills.
+  int unsent_max_bytes = 16 * 1024;
 };
 
 class ClientHub {
@@ -48,6 +52,7 @@ class ClientHub {
  private:
   struct Client;
   void accept();
+  void configureSocket(boost::asio::ip::tcp::socket& socket) const;
   void read(const std::shared_ptr<Client>& c);
   void enqueue(const std::shared_ptr<Client>& c, std::string line, bool droppable);
   void write(const std::shared_ptr<Client>& c);
