@@ -30,7 +30,7 @@ struct ClientHub::Client {
   bool discarding = false;  // inside a line that was too long
   bool watching = false;
   bool writing = false;
-  std::size_t in_flight = 0;  // queued lines the pending write covers
+  std::size_t front_sent = 0;  // bytes of the first queued line already written
   bool closed = false;
   std::deque<std::string> queue;
   Clock::time_point last_progress = Clock::now();
@@ -187,31 +187,39 @@ void ClientHub::enqueue(const std::shared_ptr<Client>& c, std::string line, bool
 void ClientHub::write(const std::shared_ptr<Client>& c) {
   if (c->queue.empty() || c->closed) return;
   c->writing = true;
-  // Everything queued (up to a limit) in one write: a client that fell behind catches up with
-  // few system calls. Deque elements stay put while more are pushed at the back.
+  // What is queued (up to a limit) in one system call: a client that fell behind catches up with
+  // few of them. Whatever the kernel takes counts as progress, even part of a line, so a slow
+  // link is not mistaken for a stuck client. Deque elements stay put while lines are pushed.
   constexpr std::size_t kMaxLines = 64, kMaxBytes = 64 * 1024;
   std::vector<asio::const_buffer> buffers;
   std::size_t bytes = 0;
   for (const std::string& line : c->queue) {
-    if (buffers.size() == kMaxLines || (!buffers.empty() && bytes + line.size() > kMaxBytes)) break;
-    buffers.push_back(asio::buffer(line));
-    bytes += line.size();
+    if (buffers.size() == kMaxLines || bytes >= kMaxBytes) break;
+    const std::size_t skip = buffers.empty() ? c->front_sent : 0;
+    buffers.push_back(asio::buffer(line) + skip);
+    bytes += line.size() - skip;
   }
-  c->in_flight = buffers.size();
-  asio::async_write(c->socket, buffers,
-                    [this, c](const boost::system::error_code& ec, std::size_t) {
-                      c->writing = false;
-                      if (c->closed) return;
-                      if (ec) {
-                        close(c, ec.message());
-                        return;
-                      }
-                      c->queue.erase(c->queue.begin(),
-                                     c->queue.begin() + static_cast<std::ptrdiff_t>(c->in_flight));
-                      c->in_flight = 0;
-                      c->last_progress = Clock::now();
-                      write(c);
-                    });
+  c->socket.async_write_some(buffers,
+                             [this, c](const boost::system::error_code& ec, std::size_t sent) {
+                               c->writing = false;
+                               if (c->closed) return;
+                               if (ec) {
+                                 close(c, ec.message());
+                                 return;
+                               }
+                               while (sent > 0) {
+                                 const std::size_t left = c->queue.front().size() - c->front_sent;
+                                 if (sent < left) {
+                                   c->front_sent += sent;
+                                   break;
+                                 }
+                                 sent -= left;
+                                 c->queue.pop_front();
+                                 c->front_sent = 0;
+                               }
+                               c->last_progress = Clock::now();
+                               write(c);
+                             });
 }
 
 void ClientHub::close(const std::shared_ptr<Client>& c, const std::string& why) {
