@@ -30,6 +30,10 @@
 //                          close the stuck client (the watchers keep reading)        [0]
 //   --client-stall-s S     robocald's client_stall_s          [not set: the daemon's default]
 //   --client-queue-max N   robocald's client_queue_max        [not set: the daemon's default]
+//   --daemon-nice N        run robocald at nice N (e.g. -10, as root: how much of the tail is
+//                          the machine's other load)                    [0: not changed]
+//   --bench-slice-us U     ask for this EEVDF time slice for the measuring thread (Linux 6.12+)
+//                          so that it wakes sooner on a loaded machine           [0: default]
 //   --cellsim PATH, --robocald PATH   [next to this binary in the build tree]
 //   --model FILE, --cell FILE         [config/puma560.json, config/cell.json of the sources]
 //   --work-dir DIR         logs and configs kept there        [a fresh folder in /tmp, removed]
@@ -40,24 +44,31 @@
 #include <fcntl.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
+#include <sched.h>
 #include <signal.h>
 #include <sys/epoll.h>
 #include <sys/ioctl.h>
 #include <sys/resource.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
+#include <sys/syscall.h>
 #include <sys/types.h>
+#include <sys/uio.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <charconv>
 #include <chrono>
+#include <climits>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -94,15 +105,39 @@ struct Options {
   double client_stall_s = -1;
   long client_queue_max = -1;
   int stuck_rcvbuf_bytes = 65536;
+  int daemon_nice = 0;  // 0: as this process
+  int bench_slice_us = 0;
   bool json_output = false;
 };
+
+// Asks for a short EEVDF time slice for this thread (Linux 6.12+; ignored before): an early
+// deadline at each wake-up, so it runs without waiting for a CPU-bound neighbour's slice to end.
+// 0: the kernel's default slice.
+bool setSliceUs(int slice_us) {
+  struct {
+    std::uint32_t size;
+    std::uint32_t sched_policy;
+    std::uint64_t sched_flags;
+    std::int32_t sched_nice;
+    std::uint32_t sched_priority;
+    std::uint64_t sched_runtime, sched_deadline, sched_period;
+  } attr{};
+  attr.size = sizeof attr;
+  attr.sched_policy = SCHED_OTHER;
+  attr.sched_nice = ::getpriority(PRIO_PROCESS, 0);
+  attr.sched_runtime = static_cast<std::uint64_t>(slice_us) * 1000;
+  return ::syscall(SYS_sched_setattr, 0, &attr, 0) == 0;
+}
 
 // ------------------------------------------------------------------------------ child processes
 class Child {
  public:
   Child(const std::vector<std::string>& argv, const std::string& out_path,
-        const std::string& err_path)
+        const std::string& err_path, int nice = 0)
       : out_path_(out_path), err_path_(err_path) {
+    // A previous run's output in the same folder must not be taken for this one's.
+    ::unlink(out_path.c_str());
+    ::unlink(err_path.c_str());
     std::vector<char*> args;
     for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
     args.push_back(nullptr);
@@ -113,6 +148,8 @@ class Child {
       const int err = ::open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
       const int in = ::open("/dev/null", O_RDONLY);
       if (out < 0 || err < 0 || in < 0) ::_exit(126);
+      if (nice != 0 && ::setpriority(PRIO_PROCESS, 0, nice) != 0) ::_exit(125);
+      setSliceUs(0);  // not this process's slice: the kernel's default, as when run alone
       ::dup2(in, 0);
       ::dup2(out, 1);
       ::dup2(err, 2);
@@ -211,11 +248,40 @@ long daemonSendQueueBytes(unsigned short daemon_port, unsigned short client_port
   return -1;
 }
 
+// CLOCK_REALTIME - CLOCK_MONOTONIC, for the kernel's receive timestamps (realtime).
+std::int64_t realtimeMinusMonotonicUs() {
+  std::int64_t best_gap = INT64_MAX, offset = 0;
+  for (int i = 0; i < 5; ++i) {
+    timespec m1{}, rt{}, m2{};
+    ::clock_gettime(CLOCK_MONOTONIC, &m1);
+    ::clock_gettime(CLOCK_REALTIME, &rt);
+    ::clock_gettime(CLOCK_MONOTONIC, &m2);
+    const auto us = [](const timespec& t) { return t.tv_sec * 1000000LL + t.tv_nsec / 1000; };
+    if (us(m2) - us(m1) < best_gap) {
+      best_gap = us(m2) - us(m1);
+      offset = us(rt) - (us(m1) + us(m2)) / 2;
+    }
+  }
+  return offset;
+}
+
 double selfCpuS() {
   rusage u{};
   ::getrusage(RUSAGE_SELF, &u);
   return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
          static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec) * 1e-6;
+}
+
+// /proc/pressure/cpu "some" total: microseconds during which some runnable task waited for a CPU
+// (-1 without PSI).
+long long cpuPressureUs() {
+  std::ifstream in("/proc/pressure/cpu");
+  for (std::string line; std::getline(in, line);) {
+    const auto at = line.find("total=");
+    if (line.rfind("some", 0) == 0 && at != std::string::npos)
+      return std::atoll(line.c_str() + at + 6);
+  }
+  return -1;
 }
 
 std::string loadAverage() {
@@ -276,6 +342,7 @@ int connectTo(unsigned short port, unsigned short& local_port, int rcvbuf_bytes 
   local_port = ntohs(local.sin_port);
   const int one = 1;
   ::setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+  ::setsockopt(fd, SOL_SOCKET, SO_TIMESTAMPNS, &one, sizeof one);
   return fd;
 }
 
@@ -310,6 +377,12 @@ struct Result {
   long readings_daemon = 0;  // seq range seen in the window: lines the driver delivered
   double nominal_sent = 0;   // stream_hz x window
   std::int64_t p50_us = 0, p99_us = 0, p999_us = 0, max_us = 0;
+  // Per reading, over the watchers: the first one to receive it and the last one (the spread
+  // between them is the fan-out; the first mostly the hand-over between threads and processes).
+  std::int64_t first_p50_us = 0, first_p99_us = 0, last_p50_us = 0, last_p99_us = 0;
+  // The same, to the segment's arrival in the watcher's socket (SO_TIMESTAMPNS): the daemon and
+  // the kernel, without the watcher's own wait for a CPU.
+  std::int64_t arrival_p50_us = 0, arrival_p99_us = 0, arrival_max_us = 0;
   long samples = 0;
   long dropped_min = 0, dropped_max = 0, dropped_total = 0;
   long received_min = 0, received_max = 0;
@@ -318,6 +391,7 @@ struct Result {
   long rss_start_kib = 0, rss_mid_kib = 0, rss_end_kib = 0, rss_min_kib = 0, rss_max_kib = 0,
        hwm_kib = 0;
   std::string load_before, load_after;
+  double cpu_pressure_pct = -1;  // share of the window in which some task waited for a CPU
   // The stuck client, from the daemon's point of view.
   bool stuck_closed = false;
   double stuck_closed_after_s = -1;  // from its `watch`
@@ -367,7 +441,7 @@ Result runConfig(const Options& o, int watchers, Stuck stuck_kind) {
   std::ofstream(dir / "robocald.json") << config.dump(2) << "\n";
   const std::string daemon_log = (dir / "robocald.log").string();
   Child daemon({o.robocald, "--config", (dir / "robocald.json").string()},
-               (dir / "robocald.out").string(), daemon_log);
+               (dir / "robocald.out").string(), daemon_log, o.daemon_nice);
   std::string listening = daemon.waitForLine("listening", 20);
   const auto port = static_cast<unsigned short>(std::stoi(listening.substr(listening.rfind(' '))));
 
@@ -416,11 +490,14 @@ Result runConfig(const Options& o, int watchers, Stuck stuck_kind) {
   const auto stuck_deadline = window_end + std::chrono::duration_cast<Clock::duration>(
                                                std::chrono::duration<double>(o.stuck_wait_s));
 
-  std::vector<std::int64_t> latencies_us;
+  std::vector<std::int64_t> latencies_us, arrival_latencies_us;
+  const std::int64_t realtime_minus_monotonic_us = realtimeMinusMonotonicUs();
   latencies_us.reserve(static_cast<std::size_t>(o.stream_hz * o.duration_s * watchers * 1.1) + 16);
   std::uint64_t seq_min = UINT64_MAX, seq_max = 0;
+  std::map<std::uint64_t, std::pair<std::int64_t, std::int64_t>> first_last_us;  // by seq
   bool started = false, mid_sampled = false;
   double cpu0 = 0, cellsim_cpu0 = 0, self_cpu0 = 0;
+  long long pressure0_us = -1;
   auto next_status = Clock::now();
   auto next_log_scan = Clock::now();
   auto next_rss = Clock::now();
@@ -455,6 +532,7 @@ Result runConfig(const Options& o, int watchers, Stuck stuck_kind) {
       cpu0 = procCpuS(daemon.pid());
       cellsim_cpu0 = procCpuS(cellsim.pid());
       self_cpu0 = selfCpuS();
+      pressure0_us = cpuPressureUs();
       r.rss_start_kib = r.rss_min_kib = r.rss_max_kib = procStatusKib(daemon.pid(), "VmRSS");
       r.load_before = loadAverage();
     }
@@ -477,6 +555,9 @@ Result runConfig(const Options& o, int watchers, Stuck stuck_kind) {
       r.rss_end_kib = procStatusKib(daemon.pid(), "VmRSS");
       r.hwm_kib = procStatusKib(daemon.pid(), "VmHWM");
       r.load_after = loadAverage();
+      if (pressure0_us >= 0)
+        r.cpu_pressure_pct =
+            100.0 * static_cast<double>(cpuPressureUs() - pressure0_us) / (window_s * 1e6);
     }
     if (now >= window_end + grace && (!stuck || r.stuck_closed || now >= stuck_deadline)) break;
     if (!daemon.running()) throw std::runtime_error("robocald exited; see " + daemon_log);
@@ -493,8 +574,22 @@ Result runConfig(const Options& o, int watchers, Stuck stuck_kind) {
     for (int i = 0; i < n; ++i) {
       Conn& c = *static_cast<Conn*>(events[static_cast<std::size_t>(i)].data.ptr);
       if (!c.open) continue;
-      const ssize_t got = ::recv(c.fd, buffer.data(), buffer.size(), 0);
+      iovec iov{buffer.data(), buffer.size()};
+      alignas(cmsghdr) char control[CMSG_SPACE(sizeof(timespec))];
+      msghdr msg{};
+      msg.msg_iov = &iov;
+      msg.msg_iovlen = 1;
+      msg.msg_control = control;
+      msg.msg_controllen = sizeof control;
+      const ssize_t got = ::recvmsg(c.fd, &msg, 0);
       const std::int64_t received_us = nowUs();  // before any parsing
+      std::int64_t arrived_us = -1;  // the kernel's time of the last segment read, monotonic
+      for (cmsghdr* cm = CMSG_FIRSTHDR(&msg); cm; cm = CMSG_NXTHDR(&msg, cm))
+        if (cm->cmsg_level == SOL_SOCKET && cm->cmsg_type == SCM_TIMESTAMPNS) {
+          timespec ts{};
+          std::memcpy(&ts, CMSG_DATA(cm), sizeof ts);
+          arrived_us = ts.tv_sec * 1000000LL + ts.tv_nsec / 1000 - realtime_minus_monotonic_us;
+        }
       if (got < 0 && (errno == EAGAIN || errno == EINTR)) continue;
       if (got <= 0) {
         c.open = false;
@@ -525,7 +620,13 @@ Result runConfig(const Options& o, int watchers, Stuck stuck_kind) {
         if (t_us < window_start_us || t_us >= window_end_us) continue;
         const std::int64_t latency_us = received_us - t_us;
         latencies_us.push_back(latency_us);
+        if (arrived_us >= 0) arrival_latencies_us.push_back(arrived_us - t_us);
         c.max_latency_us = std::max(c.max_latency_us, latency_us);
+        const auto [it, fresh] = first_last_us.try_emplace(seq, latency_us, latency_us);
+        if (!fresh) {
+          it->second.first = std::min(it->second.first, latency_us);
+          it->second.second = std::max(it->second.second, latency_us);
+        }
         if (c.received > 0 && seq <= c.last_seq) ++c.out_of_order;
         if (c.received == 0) c.first_seq = seq;
         c.last_seq = seq;
@@ -551,6 +652,20 @@ Result runConfig(const Options& o, int watchers, Stuck stuck_kind) {
   r.p99_us = percentile(latencies_us, 0.99);
   r.p999_us = percentile(latencies_us, 0.999);
   r.max_us = latencies_us.empty() ? 0 : *std::max_element(latencies_us.begin(), latencies_us.end());
+  r.arrival_p50_us = percentile(arrival_latencies_us, 0.50);
+  r.arrival_p99_us = percentile(arrival_latencies_us, 0.99);
+  r.arrival_max_us = arrival_latencies_us.empty() ? 0
+                                                  : *std::max_element(arrival_latencies_us.begin(),
+                                                                      arrival_latencies_us.end());
+  std::vector<std::int64_t> firsts_us, lasts_us;
+  for (const auto& [seq, fl] : first_last_us) {
+    firsts_us.push_back(fl.first);
+    lasts_us.push_back(fl.second);
+  }
+  r.first_p50_us = percentile(firsts_us, 0.50);
+  r.first_p99_us = percentile(firsts_us, 0.99);
+  r.last_p50_us = percentile(lasts_us, 0.50);
+  r.last_p99_us = percentile(lasts_us, 0.99);
   bool first = true;
   for (const auto& c : conns) {
     if (c->role != Role::kWatcher) continue;
@@ -588,6 +703,13 @@ json toJson(const Result& r) {
           {"latency_p99_us", r.p99_us},
           {"latency_p999_us", r.p999_us},
           {"latency_max_us", r.max_us},
+          {"arrival_latency_p50_us", r.arrival_p50_us},
+          {"arrival_latency_p99_us", r.arrival_p99_us},
+          {"arrival_latency_max_us", r.arrival_max_us},
+          {"first_watcher_latency_p50_us", r.first_p50_us},
+          {"first_watcher_latency_p99_us", r.first_p99_us},
+          {"last_watcher_latency_p50_us", r.last_p50_us},
+          {"last_watcher_latency_p99_us", r.last_p99_us},
           {"dropped_per_watcher_min", r.dropped_min},
           {"dropped_per_watcher_max", r.dropped_max},
           {"dropped_total", r.dropped_total},
@@ -608,6 +730,7 @@ json toJson(const Result& r) {
           {"status_clients_max", r.status_clients_max},
           {"load_average_before", r.load_before},
           {"load_average_after", r.load_after},
+          {"cpu_pressure_pct", r.cpu_pressure_pct},
           {"stuck_closed", r.stuck_closed},
           {"stuck_closed_after_s", r.stuck_closed_after_s},
           {"stuck_reason", r.stuck_reason},
@@ -638,9 +761,20 @@ void printTable(const Options& o, const std::vector<Result>& results) {
   for (const auto& r : results) {
     std::printf(
         "watchers=%d stuck=%s: %.0f readings sent (nominal), %ld read by the daemon; "
-        "%ld watcher(s) disconnected, %ld out of order; load %s -> %s\n",
+        "%ld watcher(s) disconnected, %ld out of order; load %s -> %s, CPU pressure %.0f %%\n",
         r.watchers, stuckName(r.stuck), r.nominal_sent, r.readings_daemon, r.watchers_disconnected,
-        r.out_of_order, r.load_before.c_str(), r.load_after.c_str());
+        r.out_of_order, r.load_before.c_str(), r.load_after.c_str(), r.cpu_pressure_pct);
+    std::printf(
+        "  to the arrival in the watchers' sockets (kernel timestamp): p50/p99/max "
+        "%lld/%lld/%lld us\n",
+        static_cast<long long>(r.arrival_p50_us), static_cast<long long>(r.arrival_p99_us),
+        static_cast<long long>(r.arrival_max_us));
+    std::printf(
+        "  per reading, first watcher p50/p99 %lld/%lld us, last watcher p50/p99 %lld/%lld "
+        "us; p99.9 over all %lld us\n",
+        static_cast<long long>(r.first_p50_us), static_cast<long long>(r.first_p99_us),
+        static_cast<long long>(r.last_p50_us), static_cast<long long>(r.last_p99_us),
+        static_cast<long long>(r.p999_us));
     if (r.stuck == Stuck::kNone) continue;
     char buffers[64] = "system default buffers";
     if (r.stuck == Stuck::kSmallBuffer)
@@ -665,11 +799,11 @@ std::string besideSelf(const std::string& relative) {
 
 [[noreturn]] void usage(int code) {
   std::fprintf(code ? stderr : stdout,
-               "usage: robocal-bench-stream [--watchers 1,16,64] [--no-compare] [--duration-s S]"
-               " [--warmup-s S]\n  [--stuck-rcvbuf-bytes N] [--stream-hz F] [--stuck-wait-s S] "
-               "[--client-stall-s S]"
-               " [--client-queue-max N]\n  [--cellsim PATH] [--robocald PATH] [--model FILE]"
-               " [--cell FILE] [--work-dir DIR] [--json]\n");
+               "usage: robocal-bench-stream [--watchers 1,16,64] [--no-compare] [--duration-s S]\n"
+               "  [--warmup-s S] [--stream-hz F] [--stuck-rcvbuf-bytes N] [--stuck-wait-s S]\n"
+               "  [--client-stall-s S] [--client-queue-max N] [--daemon-nice N]\n"
+               "  [--bench-slice-us U] [--cellsim PATH] [--robocald PATH] [--model FILE]\n"
+               "  [--cell FILE] [--work-dir DIR] [--json]\n");
   std::exit(code);
 }
 
@@ -704,6 +838,10 @@ int main(int argc, char** argv) {
         o.stuck_wait_s = std::stod(value());
       } else if (a == "--stuck-rcvbuf-bytes") {
         o.stuck_rcvbuf_bytes = std::stoi(value());
+      } else if (a == "--bench-slice-us") {
+        o.bench_slice_us = std::stoi(value());
+      } else if (a == "--daemon-nice") {
+        o.daemon_nice = std::stoi(value());
       } else if (a == "--client-stall-s") {
         o.client_stall_s = std::stod(value());
       } else if (a == "--client-queue-max") {
@@ -733,6 +871,8 @@ int main(int argc, char** argv) {
     usage(2);
   }
   ::signal(SIGPIPE, SIG_IGN);
+  if (o.bench_slice_us > 0 && !setSliceUs(o.bench_slice_us))
+    std::fprintf(stderr, "robocal-bench-stream: no time slice: %s\n", std::strerror(errno));
   bool remove_work_dir = false;
   if (o.work_dir.empty()) {
     char tmpl[] = "/tmp/robocal-bench-stream-XXXXXX";
@@ -769,6 +909,7 @@ int main(int argc, char** argv) {
   }
   if (o.json_output) {
     json out = {{"stream_hz", o.stream_hz},
+                {"bench_slice_us", o.bench_slice_us},
                 {"duration_s", o.duration_s},
                 {"warmup_s", o.warmup_s},
                 {"cpus", ::sysconf(_SC_NPROCESSORS_ONLN)},
