@@ -87,7 +87,10 @@ void RunDir::setState(const nlohmann::json& state) {
 }
 
 void RunDir::writeJson(const std::string& name, const nlohmann::json& value) const {
-  writeTextFileAtomic(file(name), value.dump(1) + "\n");
+  // Text from devices (a garbled reply quoted in a pause reason) may not be UTF-8: replaced, or
+  // the dump throws and the state is never written.
+  writeTextFileAtomic(file(name),
+                      value.dump(1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
 }
 
 RunStore::RunStore(std::string data_dir) : runs_dir_(data_dir + "/runs") {
