@@ -1,10 +1,27 @@
 #!/usr/bin/env bash
 # The whole test suite again, built with AddressSanitizer and UndefinedBehaviorSanitizer
 # (robocald and robocal-cellsim included, so the end-to-end tests run sanitized too).
+# Every process writes its sanitizer reports under $reports, so a report from a child daemon
+# or cellsim (even one at its exit, after the test's last check) fails the script too.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 "$root/scripts/setup.sh"
 export ROBOCAL_BUILD_DIR=${ROBOCAL_ASAN_BUILD_DIR:-$root/build-asan}
 "$root/scripts/build.sh" -DROBOCAL_SANITIZE=address
+reports=$ROBOCAL_BUILD_DIR/sanitizer-reports
+rm -rf "$reports"
+mkdir -p "$reports"
+export ASAN_OPTIONS="log_path=$reports/asan ${ASAN_OPTIONS:-}"
+export UBSAN_OPTIONS="log_path=$reports/ubsan print_stacktrace=1 ${UBSAN_OPTIONS:-}"
 cd "$ROBOCAL_BUILD_DIR"
-ctest --output-on-failure -j "$(nproc)" --timeout 900
+status=0
+ctest --output-on-failure -j "$(nproc)" --timeout 900 || status=$?
+if compgen -G "$reports/*" >/dev/null; then
+  echo "Sanitizer reports:"
+  for f in "$reports"/*; do
+    echo "== $f"
+    head -60 "$f"
+  done
+  status=1
+fi
+exit $status
