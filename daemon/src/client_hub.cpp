@@ -96,8 +96,8 @@ void ClientHub::accept() {
 }
 
 void ClientHub::configureSocket(tcp::socket& socket) const {
-  // Lines go out as they come: no Nagle (with the reader's delayed ACKs it held a reading back
-  // up to 40 ms).
+  // Lines go out as they come: with Nagle, a line waits while the previous one is unacknowledged,
+  // up to the client's delayed ACK (40 ms) when the client is slow to read.
   boost::system::error_code ec;
   socket.set_option(tcp::no_delay(true), ec);
   if (ec) spdlog::warn("TCP_NODELAY: {}", ec.message());
