@@ -10,20 +10,20 @@
 #
 #   scripts/soak.sh [MINUTES]              (default 30; needs robocald, robocal-cellsim, robocal)
 #
-# Environment: ROBOCAL_BUILD_DIR (default build/), ROBOCAL_SOAK_OUT (default out-soak/),
-# ROBOCAL_SOAK_SEED (random seed), ROBOCAL_SOAK_STEPS_PER_SHELL (keep the first N steps of each
-# shell: a shorter plan, for a short soak), ROBOCAL_SOAK_FAULT_EVERY_S (mean seconds between faults
-# [12]), ROBOCAL_SOAK_RSS_GROWTH_PCT (allowed growth of the mean RSS, last third against first
+# Environment: ROBOCAL_BUILD_DIR (default build/), ROBOCAL_SOAK_OUT (default out/soak/),
+# ROBOCAL_SOAK_SEED (random seed), ROBOCAL_SOAK_STEPS_PER_SHELL (each shell up to its Nth data
+# point: a shorter plan, for a short soak), ROBOCAL_SOAK_FAULT_EVERY_S (mean seconds between faults
+# [30]), ROBOCAL_SOAK_RSS_GROWTH_PCT (allowed growth of the mean RSS, last third against first
 # third after warm-up [10]).
 set -uo pipefail
 minutes=${1:-30}
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${ROBOCAL_BUILD_DIR:-$root/build}
 bin=$build/cli/robocal
-out=${ROBOCAL_SOAK_OUT:-$root/out-soak}
+out=${ROBOCAL_SOAK_OUT:-$root/out/soak}
 seed=${ROBOCAL_SOAK_SEED:-$((($$ + $(date +%s)) % 32768))}
 steps_per_shell=${ROBOCAL_SOAK_STEPS_PER_SHELL:-0}
-fault_every_s=${ROBOCAL_SOAK_FAULT_EVERY_S:-12}
+fault_every_s=${ROBOCAL_SOAK_FAULT_EVERY_S:-30}
 rss_growth_pct=${ROBOCAL_SOAK_RSS_GROWTH_PCT:-10}
 model=$root/config/puma560.json
 cell=${ROBOCAL_CELL:-$root/config/cell.json}
