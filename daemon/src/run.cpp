@@ -154,6 +154,14 @@ struct RunController::Impl {
       state = "interrupted";
       state_reason = "run " + *id + " was interrupted; resume continues it";
     }
+    // `result` after a restart serves the newest fit on disk, not "no fit yet".
+    std::vector<std::string> unreadable;
+    if (auto r = store.latestResult(&unreadable)) {
+      last_result = std::move(*r);
+      spdlog::info("latest result: run {}, set {}", last_result.value("run", "?"),
+                   last_result["set"].get<long>());
+    }
+    for (const std::string& why : unreadable) spdlog::warn("result file skipped: {}", why);
     thread = std::thread([this] { threadMain(); });
   }
 

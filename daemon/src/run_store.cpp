@@ -137,4 +137,27 @@ std::optional<std::string> RunStore::latestUnfinished() const {
   return std::nullopt;
 }
 
+std::optional<nlohmann::json> RunStore::latestResult(std::vector<std::string>* skipped) const {
+  const auto all = ids();
+  for (auto it = all.rbegin(); it != all.rend(); ++it) {
+    std::optional<nlohmann::json> best;
+    for (const auto& entry : fs::directory_iterator(runs_dir_ + "/" + *it)) {
+      const std::string name = entry.path().filename().string();
+      if (!entry.is_regular_file() || !name.starts_with("result-") || !name.ends_with(".json"))
+        continue;
+      try {
+        nlohmann::json r = nlohmann::json::parse(readTextFile(entry.path().string()));
+        if (!r.is_object() || r.value("class", "") != "RESULT" || !r.contains("set") ||
+            !r["set"].is_number_integer())
+          throw FormatError("not a RESULT object with a whole \"set\"");
+        if (!best || r["set"].get<long>() > (*best)["set"].get<long>()) best = std::move(r);
+      } catch (const std::exception& e) {
+        if (skipped) skipped->push_back(entry.path().string() + ": " + e.what());
+      }
+    }
+    if (best) return best;
+  }
+  return std::nullopt;
+}
+
 }  // namespace robocal::daemon

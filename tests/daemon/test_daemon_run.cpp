@@ -135,6 +135,15 @@ TEST_CASE("a full run to RESULT recovers the true robot", "[e2e]") {
   // in each averaging window (timing differs under sanitizers); the nominal is 0.31 mm off.
   CHECK(calibrated_rms < 0.3 * nominal_rms);
   CHECK(calibrated_rms < 0.1);
+
+  // A restarted daemon serves the same fit from the run folder.
+  c.reset();
+  cell.daemon->stop();
+  cell.daemon->start();
+  const json again = cell.daemon->client()->request({{"cmd", "result"}}, 10, "RESULT");
+  CHECK(again["run"] == result["run"]);
+  CHECK(again["set"] == result["set"]);
+  CHECK(again["rms_mm"] == result["rms_mm"]);
 }
 
 TEST_CASE("kill -9 at random moments: every planned point is measured exactly once", "[e2e]") {

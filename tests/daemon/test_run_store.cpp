@@ -23,3 +23,32 @@ TEST_CASE("a pause reason quoting a garbled reply (not UTF-8) is recorded in sta
   REQUIRE(std::getline(events, line));
   CHECK(nlohmann::json::parse(line)["event"] == "paused");
 }
+
+TEST_CASE("the newest fit on disk is found again; a damaged result file is skipped and named") {
+  TempDir dir;
+  daemon::RunStore store(dir.path.string());
+  CHECK_FALSE(store.latestResult().has_value());
+  auto result = [](const std::string& run, int set) {
+    return nlohmann::json{{"class", "RESULT"}, {"run", run}, {"set", set}, {"rms_mm", 0.01}};
+  };
+  daemon::RunDir older = store.create("{}\n");
+  older.writeJson("result-set1.json", result(older.id(), 1));
+  older.writeJson("result-set2.json", result(older.id(), 2));
+  REQUIRE(store.latestResult().has_value());
+  CHECK((*store.latestResult())["set"] == 2);
+
+  daemon::RunDir newer = store.create("{}\n");
+  REQUIRE(newer.id() > older.id());
+  newer.writeJson("result-set1.json", result(newer.id(), 1));
+  {
+    std::ofstream torn(newer.file("result-set2.json"));
+    torn << "{\"class\": \"RESULT\", \"set\": 2, \"rms";  // cut off mid-write
+  }
+  std::vector<std::string> skipped;
+  const auto latest = store.latestResult(&skipped);
+  REQUIRE(latest.has_value());
+  CHECK((*latest)["run"] == newer.id());
+  CHECK((*latest)["set"] == 1);
+  REQUIRE(skipped.size() == 1);
+  CHECK(skipped[0].find("result-set2.json") != std::string::npos);
+}

@@ -45,6 +45,10 @@ class RunStore {
   RunDir open(const std::string& id) const;
   // The newest run whose state is neither done nor aborted.
   std::optional<std::string> latestUnfinished() const;
+  // The newest fit on disk: the result-*.json of the newest run that has one, the highest "set"
+  // in it. Files that cannot be read or parsed are skipped; their paths and errors go to
+  // `skipped`, so a restarted daemon can say why an older result is served.
+  std::optional<nlohmann::json> latestResult(std::vector<std::string>* skipped = nullptr) const;
 
  private:
   std::string runs_dir_;
