@@ -8,7 +8,7 @@
 # samples.csv (and no run with a duplicate); RSS flat; fds back to their baseline; every injected
 # fault visible in the event log. Exits 1 on any FAIL.
 #
-#   scripts/soak.sh [MINUTES]              (default 30; needs robocald, robocal-cellsim, robocal)
+#   scripts/soak.sh [MINUTES]              (default 30; installs and builds what it needs first)
 #
 # Environment: ROBOCAL_BUILD_DIR (default build/), ROBOCAL_SOAK_OUT (default out/soak/),
 # ROBOCAL_SOAK_SEED (random seed), ROBOCAL_SOAK_STEPS_PER_SHELL (each shell up to its Nth data
@@ -28,6 +28,8 @@ rss_growth_pct=${ROBOCAL_SOAK_RSS_GROWTH_PCT:-10}
 model=$root/config/puma560.json
 cell=${ROBOCAL_CELL:-$root/config/cell.json}
 RANDOM=$seed
+"$root/scripts/setup.sh" || exit 2
+ROBOCAL_BUILD_DIR=$build "$root/scripts/build.sh" || exit 2
 for f in "$bin" "$build/daemon/robocald" "$build/sim/cellsim/robocal-cellsim"; do
   [[ -x $f ]] || { echo "soak: $f missing (build robocald, robocal-cellsim, robocal)" >&2; exit 2; }
 done
