@@ -19,6 +19,7 @@
 #include <cmath>
 #include <filesystem>
 #include <future>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <set>
@@ -280,6 +281,7 @@ struct RunController::Impl {
   // A joint move, watched: stop requests, the bar (when attached), controller errors.
   JointsDeg move(const JointsDeg& target, bool bar_attached, bool recentre) {
     checkpoint();
+    if (bar_attached) watchBar(recentre);  // nothing starts with the bar already in fault
     const drivers::WhereReply w =
         val->moveJoints(toDriver(target), [&](const drivers::WhereReply&) {
           checkpoint();
@@ -418,8 +420,13 @@ struct RunController::Impl {
   }
 
   // The corrective move toward zero deflection: the ball moved along the bar by -deflection.
-  JointsDeg correction(const Model& model, const Connection& c, const JointsDeg& q,
-                       double deflection_mm) {
+  // Checked like a planned pose before anything moves (limits, singularities, bar-tool angle,
+  // clearances; not the deviation from the shell, which is what it corrects), and a move of a few
+  // mm must stay a small turn of every joint: a larger one means a singular pose or a wrong model.
+  // Either stops the run.
+  JointsDeg correction(const Model& model, const CellConfig& cell_config, const ShellPlan& shell,
+                       const JointsDeg& q, double deflection_mm) {
+    const Connection& c = shell.connection;
     const Kinematics kin(model);
     const Eigen::Vector3d ball = kin.ballPosition(q, model.balls_mm[c.ball_index]);
     const Eigen::Vector3d u = (ball - model.chucks_mm[c.chuck_index]).normalized();
@@ -428,7 +435,22 @@ struct RunController::Impl {
     const Eigen::Vector3d move = -deflection_mm * u;
     const Eigen::Matrix<double, 6, 1> dq =
         jac.transpose() * (jac * jac.transpose()).partialPivLu().solve(move);
-    return q + dq / kRadPerDeg;
+    const JointsDeg target = q + dq / kRadPerDeg;
+    constexpr double kMaxTurnDegPerMm = 2.0;
+    const double max_turn_deg = (dq / kRadPerDeg).cwiseAbs().maxCoeff();
+    std::string problem;
+    if (!target.allFinite() ||
+        max_turn_deg > kMaxTurnDegPerMm * std::max(1.0, std::abs(deflection_mm)))
+      problem = "it would turn a joint by " + std::to_string(max_turn_deg) + " deg";
+    else
+      problem =
+          ShellPlanner(model, cell_config)
+              .poseProblem(c, shell.radius_mm, target, std::numeric_limits<double>::infinity());
+    if (!problem.empty())
+      throw StopRun{StopRun::kFault, "corrective move of " + std::to_string(deflection_mm) +
+                                         " mm on shell " + std::to_string(shell.shell) +
+                                         " refused: " + problem};
+    return target;
   }
 
   void updateProgress(int done, int total, Clock::time_point started, int done_at_start) {
@@ -451,8 +473,13 @@ struct RunController::Impl {
     std::optional<Model> previous;
     {
       std::lock_guard lock(mutex);
-      if (last_result.contains("calibrated_file") && last_result.value("run", "") == dir.id())
-        previous = loadModelFile(last_result["calibrated_file"].get<std::string>());
+      if (last_result.contains("calibrated_file") && last_result.value("run", "") == dir.id()) {
+        try {
+          previous = loadModelFile(last_result["calibrated_file"].get<std::string>());
+        } catch (const std::exception& e) {  // the fit goes on, without the prediction
+          spdlog::warn("the previous set's model cannot be read: {}", e.what());
+        }
+      }
     }
     solver = std::async(std::launch::async, [this, dir, all = std::move(all), set_extension_mm,
                                              set_index, previous]() mutable {
@@ -542,6 +569,9 @@ struct RunController::Impl {
     m.joints_deg = fromDriver(val->where().joints_deg);
     m.where_end = Clock::now();
     spinUntil(m.bar_window_start + fromSeconds(config.bar_window_s), true);
+    // The window may have passed while WHERE was answered: the bar is checked in any case.
+    checkpoint();
+    watchBar(false);
     const auto deadline =
         Clock::now() + std::chrono::duration<double>(config.drivers.bar.stale_after_s);
     while (window.empty() && Clock::now() < deadline) spin(0.02, true);
@@ -641,7 +671,8 @@ struct RunController::Impl {
                 ", then confirm."}},
           planned.shell, [&](double mm) {
             // The bar is not attached yet: the ball moves along the line to the chuck.
-            q = move(correction(refined ? *refined : nominal, c, q, -mm), false, false);
+            q = move(correction(refined ? *refined : nominal, cell_config, planned, q, -mm), false,
+                     false);
           });
       bar_maybe_attached = true;
       bar_offset_mm = cell_config.bar.nominal_length_mm + planned.extension_mm;
@@ -663,7 +694,7 @@ struct RunController::Impl {
         event(
             dir,
             {{"event", "recentre"}, {"shell", planned.shell}, {"step", -1}, {"deflection_mm", d}});
-        q = move(correction(refined ? *refined : nominal, c, q, d), true, false);
+        q = move(correction(refined ? *refined : nominal, cell_config, planned, q, d), true, false);
         last_reading.reset();
         spin(0.2, false);
         if (!last_reading) throw StopRun{StopRun::kFault, "no ball-bar reading after re-centring"};
@@ -728,7 +759,7 @@ struct RunController::Impl {
                       {"shell", planned.shell},
                       {"step", next},
                       {"deflection_mm", r.deflection_mm}});
-          q = move(correction(model, c, q, r.deflection_mm), true, false);
+          q = move(correction(model, cell_config, planned, q, r.deflection_mm), true, false);
           centring.push_back(shellSample(measureHere()));
           refit();
           replanFrom(next, q, "recentre");
@@ -808,6 +839,7 @@ struct RunController::Impl {
   void execute(Job job) {
     abort_requested = false;
     pause_requested = false;
+    link_faults_reported = linkFaultCounts();  // what happened between runs is not this run's
     {
       std::lock_guard lock(mutex);
       stop_reason.clear();

@@ -141,18 +141,31 @@ std::optional<nlohmann::json> RunStore::latestResult(std::vector<std::string>* s
   const auto all = ids();
   for (auto it = all.rbegin(); it != all.rend(); ++it) {
     std::optional<nlohmann::json> best;
-    for (const auto& entry : fs::directory_iterator(runs_dir_ + "/" + *it)) {
-      const std::string name = entry.path().filename().string();
-      if (!entry.is_regular_file() || !name.starts_with("result-") || !name.ends_with(".json"))
-        continue;
+    std::vector<fs::path> files;
+    try {
+      for (const auto& entry : fs::directory_iterator(runs_dir_ + "/" + *it)) {
+        const std::string name = entry.path().filename().string();
+        if (entry.is_regular_file() && name.starts_with("result-") && name.ends_with(".json"))
+          files.push_back(entry.path());
+      }
+    } catch (const std::exception& e) {
+      if (skipped) skipped->push_back(runs_dir_ + "/" + *it + ": " + e.what());
+    }
+    for (const fs::path& file : files) {
       try {
-        nlohmann::json r = nlohmann::json::parse(readTextFile(entry.path().string()));
-        if (!r.is_object() || r.value("class", "") != "RESULT" || !r.contains("set") ||
-            !r["set"].is_number_integer())
-          throw FormatError("not a RESULT object with a whole \"set\"");
+        nlohmann::json r = nlohmann::json::parse(readTextFile(file.string()));
+        auto is = [&r](const char* key, bool (nlohmann::json::*type)() const noexcept) {
+          return r.contains(key) && (r[key].*type)();
+        };
+        if (!r.is_object() || r.value("class", "") != "RESULT" ||
+            !is("set", &nlohmann::json::is_number_integer) ||
+            !is("run", &nlohmann::json::is_string) ||
+            !is("calibrated_file", &nlohmann::json::is_string))
+          throw FormatError(
+              "not a RESULT with a whole \"set\" and strings \"run\", \"calibrated_file\"");
         if (!best || r["set"].get<long>() > (*best)["set"].get<long>()) best = std::move(r);
       } catch (const std::exception& e) {
-        if (skipped) skipped->push_back(entry.path().string() + ": " + e.what());
+        if (skipped) skipped->push_back(file.string() + ": " + e.what());
       }
     }
     if (best) return best;

@@ -5,6 +5,7 @@
 
 #include <robocal/daemon/run_store.hpp>
 
+#include <algorithm>
 #include <fstream>
 
 using namespace robocal;
@@ -24,12 +25,16 @@ TEST_CASE("a pause reason quoting a garbled reply (not UTF-8) is recorded in sta
   CHECK(nlohmann::json::parse(line)["event"] == "paused");
 }
 
-TEST_CASE("the newest fit on disk is found again; a damaged result file is skipped and named") {
+TEST_CASE("the newest fit on disk is found again, and damaged result files are skipped and named") {
   TempDir dir;
   daemon::RunStore store(dir.path.string());
   CHECK_FALSE(store.latestResult().has_value());
   auto result = [](const std::string& run, int set) {
-    return nlohmann::json{{"class", "RESULT"}, {"run", run}, {"set", set}, {"rms_mm", 0.01}};
+    return nlohmann::json{{"class", "RESULT"},
+                          {"run", run},
+                          {"set", set},
+                          {"calibrated_file", "calibrated-set" + std::to_string(set) + ".json"},
+                          {"rms_mm", 0.01}};
   };
   daemon::RunDir older = store.create("{}\n");
   older.writeJson("result-set1.json", result(older.id(), 1));
@@ -44,11 +49,15 @@ TEST_CASE("the newest fit on disk is found again; a damaged result file is skipp
     std::ofstream torn(newer.file("result-set2.json"));
     torn << "{\"class\": \"RESULT\", \"set\": 2, \"rms";  // cut off mid-write
   }
+  // Valid JSON, but not what the daemon could serve: no run named.
+  newer.writeJson("result-set3.json", {{"class", "RESULT"}, {"set", 3}, {"run", nullptr}});
   std::vector<std::string> skipped;
   const auto latest = store.latestResult(&skipped);
   REQUIRE(latest.has_value());
   CHECK((*latest)["run"] == newer.id());
   CHECK((*latest)["set"] == 1);
-  REQUIRE(skipped.size() == 1);
+  REQUIRE(skipped.size() == 2);
+  std::sort(skipped.begin(), skipped.end());
   CHECK(skipped[0].find("result-set2.json") != std::string::npos);
+  CHECK(skipped[1].find("result-set3.json") != std::string::npos);
 }
