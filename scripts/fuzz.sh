@@ -2,6 +2,7 @@
 # Builds the libFuzzer harnesses (fuzz/) with clang, ASan and UBSan into build-fuzz/ (or
 # $ROBOCAL_FUZZ_BUILD_DIR) and runs each for a bounded time on a copy of its seed corpus.
 #   scripts/fuzz.sh [seconds-per-harness, default 30] [harness names, default all]
+#   ROBOCAL_FUZZ_SEED=N: libFuzzer's -seed (default: a new one each run)
 # Exits non-zero when a harness crashes (a sanitizer report, an undocumented exception or a broken
 # property) and prints the reproducer; run it again with  build-fuzz/fuzz/fuzz_<name> <file>.
 set -euo pipefail
@@ -44,6 +45,8 @@ for name in "${names[@]}"; do
   args=(-max_total_time="$seconds" -rss_limit_mb=2048 -timeout=10 -print_final_stats=1
         -artifact_prefix="$work/artifacts/")
   [[ -f $root/fuzz/$name.dict ]] && args+=(-dict="$root/fuzz/$name.dict")
+  # A fixed seed (CI sets one) makes a run repeatable up to timing; unset, each run explores anew.
+  [[ -n ${ROBOCAL_FUZZ_SEED:-} ]] && args+=(-seed="$ROBOCAL_FUZZ_SEED")
   status=0
   "$exe" "${args[@]}" "$work/corpus" >"$work/log" 2>&1 || status=$?
   execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$work/log" | tail -1)
