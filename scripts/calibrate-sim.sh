@@ -5,6 +5,8 @@
 # extension), and a simulated operator answers the connection prompts. Output in out/.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
+# shellcheck source=sim-cell.sh
+source "$root/scripts/sim-cell.sh"
 "$root/scripts/setup.sh"
 "$root/scripts/build.sh"
 build=${ROBOCAL_BUILD_DIR:-$root/build}
@@ -29,28 +31,7 @@ echo "== the off-line plan"
 "$bin" plan --model "$model" --cell "$cell" --out "$out/plan.json" | grep -E "^(plan|identification|forecast|planned)"
 echo
 echo "== robocal-cellsim (VAL II and ball-bar on pseudo-terminals) and robocald"
-"$build/sim/cellsim/robocal-cellsim" --model "$out/truth.json" --val-link "$out/val" \
-  --bar-link "$out/bar" --control "$out/cellsim.sock" --time-scale 100 --bar-mode streamed \
-  --stream-hz 100 --bar-mm 150 --range-mm 2.0 --noise-mm 0.06 --quantum-deg 0.005 \
-  >"$out/cellsim.log" 2>&1 &
-pids+=($!)
-for _ in $(seq 100); do grep -q ready "$out/cellsim.log" && break; sleep 0.1; done
-cat >"$out/robocald.json" <<JSON
-{
-  "listen_address": "127.0.0.1", "port": 0, "data_dir": "$out/data",
-  "model": "$model", "cell": "$cell", "plan": "$out/plan.json",
-  "settle_s": 0.03, "bar_window_s": 0.03, "bar_soft_limit_mm": 1.0, "bar_hard_limit_mm": 1.6,
-  "drivers": {
-    "val": {"serial": {"path": "$out/val"}, "poll_interval_s": 0.01},
-    "bar": {"serial": {"path": "$out/bar"}, "mode": "streamed"}
-  }
-}
-JSON
-"$build/daemon/robocald" --config "$out/robocald.json" >"$out/robocald.out" 2>"$out/robocald.log" &
-pids+=($!)
-for _ in $(seq 100); do grep -q listening "$out/robocald.out" && break; sleep 0.1; done
-port=$(awk '/listening/ {print $3}' "$out/robocald.out")
-export ROBOCAL_TOKEN_FILE=$out/data/token
+start_sim_cell "$build" "$out" "$model" "$cell"
 echo "robocald on 127.0.0.1:$port; cellsim control $out/cellsim.sock"
 echo
 echo "== the run (the simulated operator answers each prompt)"

@@ -18,6 +18,8 @@
 set -uo pipefail
 minutes=${1:-30}
 root=$(cd "$(dirname "$0")/.." && pwd)
+# shellcheck source=sim-cell.sh
+source "$root/scripts/sim-cell.sh"
 build=${ROBOCAL_BUILD_DIR:-$root/build}
 bin=$build/cli/robocal
 out=${ROBOCAL_SOAK_OUT:-$root/out/soak}
@@ -63,30 +65,7 @@ fi
 plan_points=$(jq '[.shells[].steps[] | select(.kind == "point")] | length' "$out/plan.json")
 log "plan: $(jq '.shells | length' "$out/plan.json") shells, $plan_points points"
 
-"$build/sim/cellsim/robocal-cellsim" --model "$out/truth.json" --val-link "$out/val" \
-  --bar-link "$out/bar" --control "$out/cellsim.sock" --time-scale 100 --bar-mode streamed \
-  --stream-hz 100 --bar-mm 150 --range-mm 2.0 --noise-mm 0.06 --quantum-deg 0.005 \
-  --seed "$seed" >"$out/cellsim.log" 2>&1 &
-pids+=($!)
-for _ in $(seq 100); do grep -q ready "$out/cellsim.log" && break; sleep 0.1; done
-cat >"$out/robocald.json" <<JSON
-{
-  "listen_address": "127.0.0.1", "port": 0, "data_dir": "$out/data",
-  "model": "$model", "cell": "$cell", "plan": "$out/plan.json",
-  "settle_s": 0.03, "bar_window_s": 0.03, "bar_soft_limit_mm": 1.0, "bar_hard_limit_mm": 1.6,
-  "drivers": {
-    "val": {"serial": {"path": "$out/val"}, "poll_interval_s": 0.01},
-    "bar": {"serial": {"path": "$out/bar"}, "mode": "streamed"}
-  }
-}
-JSON
-"$build/daemon/robocald" --config "$out/robocald.json" >"$out/robocald.out" 2>"$out/robocald.log" &
-daemon_pid=$!
-pids+=("$daemon_pid")
-for _ in $(seq 100); do grep -q listening "$out/robocald.out" && break; sleep 0.1; done
-port=$(awk '/listening/ {print $3}' "$out/robocald.out")
-[[ -n $port ]] || { echo "soak: robocald did not start" >&2; cat "$out/robocald.log" >&2; exit 2; }
-export ROBOCAL_TOKEN_FILE=$out/data/token
+start_sim_cell "$build" "$out" "$model" "$cell" --seed "$seed" || exit 2
 sock=$out/cellsim.sock
 log "robocald pid $daemon_pid on 127.0.0.1:$port"
 
