@@ -10,21 +10,13 @@ using robocal::fuzz::check;
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   return robocal::fuzz::guarded(data, size, [](const std::string& text) {
-    CellConfig cell;
-    try {
-      cell = parseCell(text, "fuzz.json");
-    } catch (const FormatError&) {
-      return;
-    }
-    const nlohmann::ordered_json written = cellToJson(cell);
-    CellConfig again;
-    try {
-      again = parseCell(written.dump(2), "written");
-    } catch (const FormatError& e) {
-      robocal::fuzz::fail("written cell does not parse", e.what());
-    }
+    const auto both = robocal::fuzz::readWriteRead<FormatError>(
+        text, [](const std::string& t) { return parseCell(t, "fuzz.json"); },
+        [](const CellConfig& c) { return cellToJson(c).dump(2); }, "written cell does not parse");
+    if (!both) return;
+    const auto& [cell, again] = *both;
     std::string path = "cell";
-    check(robocal::fuzz::sameJson(written, cellToJson(again), 0, 0, path),
+    check(robocal::fuzz::sameJson(cellToJson(cell), cellToJson(again), 0, 0, path),
           "cell changed on a round trip", path);
   });
 }

@@ -9,7 +9,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <optional>
 #include <string>
+#include <utility>
 
 namespace robocal::fuzz {
 
@@ -85,6 +87,28 @@ bool sameJson(const A& a, const B& b, double abs_tol, double rel_tol, std::strin
   if (a == b) return true;
   path += ": " + a.dump() + " != " + b.dump();
   return false;
+}
+
+// The round trip every file reader's harness makes: `read` the input, and when it is accepted
+// (anything else must be the reader's documented `Error`), `write` it back and read that, which
+// must succeed. Returns the value read first and the value read again; nothing when the input is
+// rejected.
+template <typename Error, typename Read, typename Write>
+auto readWriteRead(const std::string& input, Read&& read, Write&& write, const char* what)
+    -> std::optional<std::pair<decltype(read(input)), decltype(read(input))>> {
+  using Value = decltype(read(input));
+  std::optional<Value> first;
+  try {
+    first = read(input);
+  } catch (const Error&) {
+    return std::nullopt;
+  }
+  const auto written = write(*first);
+  try {
+    return std::pair<Value, Value>(std::move(*first), read(written));
+  } catch (const Error& e) {
+    fail(what, e.what());
+  }
 }
 
 }  // namespace robocal::fuzz

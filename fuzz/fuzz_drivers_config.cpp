@@ -13,19 +13,13 @@ using robocal::fuzz::check;
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   return robocal::fuzz::guarded(data, size, [](const std::string& text) {
-    DriversConfig config;
-    try {
-      config = parseDriversConfig(text, "drivers.json");
-    } catch (const ConfigError&) {
-      return;
-    }
+    const auto both = robocal::fuzz::readWriteRead<ConfigError>(
+        text, [](const std::string& t) { return parseDriversConfig(t, "drivers.json"); },
+        [](const DriversConfig& c) { return toJson(c).dump(); },
+        "written configuration does not read back");
+    if (!both) return;
+    const auto& [config, again] = *both;
     const nlohmann::json written = toJson(config);
-    DriversConfig again;
-    try {
-      again = driversConfigFromJson(written, "written");
-    } catch (const ConfigError& e) {
-      robocal::fuzz::fail("written configuration does not read back", e.what());
-    }
     check(toJson(again) == written, "configuration changed on a round trip", written.dump());
 
     const ValDialect val(config.val);

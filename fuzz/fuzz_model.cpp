@@ -10,19 +10,11 @@ using robocal::fuzz::check;
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   return robocal::fuzz::guarded(data, size, [](const std::string& text) {
-    Model model;
-    try {
-      model = parseModel(text, "fuzz.json");
-    } catch (const FormatError&) {
-      return;
-    }
-    const std::string written = formatModel(model);
-    Model again;
-    try {
-      again = parseModel(written, "written");
-    } catch (const FormatError& e) {
-      robocal::fuzz::fail("written model does not parse", e.what());
-    }
+    const auto both = robocal::fuzz::readWriteRead<FormatError>(
+        text, [](const std::string& t) { return parseModel(t, "fuzz.json"); }, formatModel,
+        "written model does not parse");
+    if (!both) return;
+    const auto& [model, again] = *both;
     check(again.name == model.name, "name changed on a round trip");
     for (int k = 0; k < kLinkCount; ++k) {
       const LinkParams &a = model.links[k], &b = again.links[k];

@@ -10,19 +10,11 @@ using robocal::fuzz::check;
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   return robocal::fuzz::guarded(data, size, [](const std::string& text) {
-    Plan plan;
-    try {
-      plan = parsePlan(text, "fuzz.json");
-    } catch (const FormatError&) {
-      return;
-    }
-    const std::string written = formatPlan(plan);
-    Plan again;
-    try {
-      again = parsePlan(written, "written");
-    } catch (const FormatError& e) {
-      robocal::fuzz::fail("written plan does not parse", e.what() + ("\n" + written));
-    }
+    const auto both = robocal::fuzz::readWriteRead<FormatError>(
+        text, [](const std::string& t) { return parsePlan(t, "fuzz.json"); }, formatPlan,
+        "written plan does not parse");
+    if (!both) return;
+    const auto& [plan, again] = *both;
     std::string path = "plan";
     check(robocal::fuzz::sameJson(planToJson(plan), planToJson(again), 1e-9, 1e-12, path),
           "plan changed on a round trip", path);
