@@ -68,8 +68,9 @@ Clock::duration fromSeconds(double seconds) {
 struct PointTiming {
   Clock::time_point motion_complete, bar_window_start, where_end, sample_on_disk;
 
+  static double toMicrosecond(double ms) { return std::round(ms * 1e3) / 1e3; }
   static double msBetween(Clock::time_point from, Clock::time_point to) {
-    return std::round(std::chrono::duration<double, std::milli>(to - from).count() * 1e3) / 1e3;
+    return toMicrosecond(std::chrono::duration<double, std::milli>(to - from).count());
   }
   nlohmann::json toEvent(int shell, double lat_deg, double lon_deg, double settle_s) const {
     const double settle_achieved_ms = msBetween(motion_complete, bar_window_start);
@@ -79,7 +80,7 @@ struct PointTiming {
             {"lon_deg", lon_deg},
             {"settle_s", settle_s},
             {"settle_achieved_ms", settle_achieved_ms},
-            {"settle_error_ms", std::round((settle_achieved_ms - settle_s * 1e3) * 1e3) / 1e3},
+            {"settle_error_ms", toMicrosecond(settle_achieved_ms - settle_s * 1e3)},
             {"where_ms", msBetween(bar_window_start, where_end)},
             {"motion_to_disk_ms", msBetween(motion_complete, sample_on_disk)}};
   }
@@ -572,10 +573,8 @@ struct RunController::Impl {
     // The window may have passed while WHERE was answered: the bar is checked in any case.
     checkpoint();
     watchBar(false);
-    const auto deadline =
-        Clock::now() + std::chrono::duration<double>(config.drivers.bar.stale_after_s);
+    const auto deadline = Clock::now() + fromSeconds(config.drivers.bar.stale_after_s);
     while (window.empty() && Clock::now() < deadline) spin(0.02, true);
-    collecting = false;
     if (window.empty()) throw StopRun{StopRun::kFault, "no ball-bar reading to record"};
     double sum = 0, lo = window.front(), hi = window.front();
     for (double v : window) {

@@ -154,13 +154,11 @@ std::optional<nlohmann::json> RunStore::latestResult(std::vector<std::string>* s
     for (const fs::path& file : files) {
       try {
         nlohmann::json r = nlohmann::json::parse(readTextFile(file.string()));
-        auto is = [&r](const char* key, bool (nlohmann::json::*type)() const noexcept) {
-          return r.contains(key) && (r[key].*type)();
-        };
-        if (!r.is_object() || r.value("class", "") != "RESULT" ||
-            !is("set", &nlohmann::json::is_number_integer) ||
-            !is("run", &nlohmann::json::is_string) ||
-            !is("calibrated_file", &nlohmann::json::is_string))
+        const bool usable = r.is_object() && r.value("class", "") == "RESULT" &&
+                            r.value("set", nlohmann::json()).is_number_integer() &&
+                            r.value("run", nlohmann::json()).is_string() &&
+                            r.value("calibrated_file", nlohmann::json()).is_string();
+        if (!usable)
           throw FormatError(
               "not a RESULT with a whole \"set\" and strings \"run\", \"calibrated_file\"");
         if (!best || r["set"].get<long>() > (*best)["set"].get<long>()) best = std::move(r);
