@@ -3,6 +3,7 @@
 #include <robocal/daemon/client_hub.hpp>
 #include <robocal/daemon/config.hpp>
 #include <robocal/daemon/run.hpp>
+#include <robocal/daemon/token.hpp>
 #include <robocal/formats/model_json.hpp>
 #include <robocal/planner/cell_json.hpp>
 #include <robocal/planner/check.hpp>
@@ -18,12 +19,7 @@
 #include <boost/asio/signal_set.hpp>
 #include <boost/asio/steady_timer.hpp>
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
 #include <cstdio>
-#include <cstring>
-#include <filesystem>
 #include <future>
 
 namespace asio = boost::asio;
@@ -34,50 +30,6 @@ using namespace robocal::daemon;
 namespace {
 
 constexpr const char* kRelease = "0.1.0";
-
-// The token file holds a random secret (mode 0600), made at first start.
-std::string loadOrCreateToken(const std::string& path) {
-  std::error_code ec;
-  std::filesystem::create_directories(std::filesystem::path(path).parent_path(), ec);
-  if (!std::filesystem::exists(path)) {
-    unsigned char raw[24];
-    const int rnd = ::open("/dev/urandom", O_RDONLY | O_CLOEXEC);
-    if (rnd < 0 || ::read(rnd, raw, sizeof raw) != static_cast<ssize_t>(sizeof raw))
-      throw std::runtime_error("cannot read /dev/urandom for the token");
-    ::close(rnd);
-    std::string token;
-    for (unsigned char b : raw) {
-      char hex[3];
-      std::snprintf(hex, sizeof hex, "%02x", b);
-      token += hex;
-    }
-    const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
-    if (fd < 0)
-      throw std::runtime_error(path + ": cannot create the token file: " + std::strerror(errno));
-    const std::string line = token + "\n";
-    const bool ok = ::write(fd, line.data(), line.size()) == static_cast<ssize_t>(line.size());
-    ::fsync(fd);
-    ::close(fd);
-    if (!ok) throw std::runtime_error(path + ": cannot write the token");
-    spdlog::info("created token file {}", path);
-  }
-  struct stat st {};
-  if (::stat(path.c_str(), &st) == 0 && (st.st_mode & 077))
-    spdlog::warn("token file {} is readable by others (mode {:o}); chmod 600 it", path,
-                 st.st_mode & 0777);
-  std::string token = readTextFile(path);
-  while (!token.empty() && (token.back() == '\n' || token.back() == '\r' || token.back() == ' '))
-    token.pop_back();
-  if (token.size() < 16)
-    throw std::runtime_error(path + ": the token is shorter than 16 characters");
-  return token;
-}
-
-bool sameToken(const std::string& a, const std::string& b) {
-  unsigned char diff = a.size() == b.size() ? 0 : 1;
-  for (std::size_t i = 0; i < a.size(); ++i) diff |= a[i] ^ b[i % std::max<size_t>(1, b.size())];
-  return diff == 0;
-}
 
 json planObject(const Plan& plan, const std::string& source) {
   const auto& s = plan.summary;

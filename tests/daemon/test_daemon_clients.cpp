@@ -4,8 +4,10 @@
 #include "../drivers/cellsim_process.hpp"
 #include "daemon_process.hpp"
 
+#include <robocal/daemon/token.hpp>
 #include <robocal/drivers/config.hpp>
 
+#include <grp.h>
 #include <sys/stat.h>
 #include <fstream>
 #include <thread>
@@ -86,10 +88,15 @@ TEST_CASE("commands that move the robot need the token") {
     CHECK(c->request({{"cmd", cmd}, {"token", "wrong-token-wrong-token"}})["message"] ==
           std::string("wrong token for ") + cmd);
   }
-  // The token file is private to the daemon's user.
+  // The token file is private to the daemon's user, or readable by the operators' group only.
   struct stat st {};
   REQUIRE(::stat((f.daemon->dataDir() + "/token").c_str(), &st) == 0);
-  CHECK((st.st_mode & 077) == 0);
+  CHECK((st.st_mode & 037) == 0);
+  if (st.st_mode & 040) {
+    const group* operators = ::getgrnam(daemon::kOperatorGroup);
+    REQUIRE(operators);
+    CHECK(st.st_gid == operators->gr_gid);
+  }
   // With the token, a command is served (nothing to confirm now).
   const json ok = c->request({{"cmd", "confirm"}, {"token", f.daemon->token()}});
   CHECK_THAT(ok["message"].get<std::string>(), Contains("nothing to confirm"));
