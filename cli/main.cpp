@@ -1,6 +1,7 @@
 // robocal: the command line. Each subcommand lives in its own cmd_*.cpp and registers itself.
 #include "args.hpp"
 
+#include <robocal/build_info.hpp>
 #include <robocal/formats/error.hpp>
 
 #include <algorithm>
@@ -15,9 +16,14 @@ int main(int argc, char** argv) {
   const std::string name = argc > 1 ? argv[1] : "";
   if (name.empty() || name == "help" || name == "--help" || name == "-h") {
     std::printf(
-        "usage: robocal <command> [options]   (robocal <command> --help for its options)\n\n");
+        "usage: robocal <command> [options]   (robocal <command> --help for its options)\n"
+        "       robocal --version\n\n");
     for (const auto& c : commands) std::printf("  %-14s %s\n", c.name.c_str(), c.summary.c_str());
     return name.empty() ? 2 : 0;
+  }
+  if (name == "--version") {
+    std::printf("robocal %s\n", robocal::build::kVersion);
+    return 0;
   }
   for (const auto& c : commands) {
     if (c.name != name) continue;

@@ -1,5 +1,6 @@
 // robocald: the robot-cell daemon. One Boost.Asio event loop serves the clients (JSON lines over
 // TCP); the run thread owns the serial drivers; planning and fits run on worker threads.
+#include <robocal/build_info.hpp>
 #include <robocal/daemon/client_hub.hpp>
 #include <robocal/daemon/config.hpp>
 #include <robocal/daemon/run.hpp>
@@ -29,7 +30,27 @@ using namespace robocal::daemon;
 
 namespace {
 
-constexpr const char* kRelease = "0.1.0";
+// robocald --help; the man page robocald(8) is made from it. %s: the default config, the
+// default data_dir.
+constexpr const char* kHelp = R"(usage: robocald [--config FILE] [--port N]
+       robocald --version | --help
+
+The robot-cell daemon of robocal. It owns the serial links to the VAL II controller and the
+ball-bar reader, runs calibration runs from checked plans, streams live readings to any number
+of clients (JSON lines over TCP) and fits the model when a shell set completes. systemd starts
+it (robocald.service); `robocal status`, `watch`, `start` and the other daemon commands talk to it.
+
+  -c, --config FILE     the configuration file    [%s]
+  --port N              listen on port N instead of the file's port (0: any free port)
+  --version             print the version and exit
+  -h, --help            print this help and exit
+
+Every key of the configuration file is checked at start; a wrong one stops the daemon with its
+name (exit code 2). Runs are kept below data_dir [%s]; the token that commands
+moving the robot need is made there at first start (file token: mode 0600, or 0640 for the
+robocal group when the daemon runs in it, as under the unit). Once it listens it prints
+"listening ADDRESS PORT".
+)";
 
 json planObject(const Plan& plan, const std::string& source) {
   const auto& s = plan.summary;
@@ -59,7 +80,7 @@ class Daemon {
             {config_.max_clients, config_.max_line_bytes, config_.client_queue_max,
              config_.client_stall_s},
             [this](ClientHub::ClientId id, const std::string& line) { onLine(id, line); },
-            [] { return proto::versionObject(kRelease); }),
+            [] { return proto::versionObject(build::kVersion); }),
         run_(config_, nominal_, cell_, [this](json object, bool droppable) {
           // From the run and solver threads into the event loop.
           asio::post(io_, [this, object = std::move(object), droppable] {
@@ -226,7 +247,7 @@ void watchdog(asio::steady_timer& timer, double interval_s) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string config_path = "/etc/robocald/robocald.json";
+  std::string config_path = build::kDaemonConfigFile;
   int port_override = -1;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -235,8 +256,10 @@ int main(int argc, char** argv) {
     } else if (a == "--port" && i + 1 < argc) {
       port_override = std::atoi(argv[++i]);
     } else if (a == "--help" || a == "-h") {
-      std::printf("usage: robocald [--config FILE] [--port N]\n  default config: %s\n",
-                  config_path.c_str());
+      std::printf(kHelp, build::kDaemonConfigFile, DaemonConfig{}.data_dir.c_str());
+      return 0;
+    } else if (a == "--version") {
+      std::printf("robocald %s\n", build::kVersion);
       return 0;
     } else {
       std::fprintf(stderr, "robocald: unknown argument '%s' (robocald --help)\n", a.c_str());
@@ -256,7 +279,7 @@ int main(int argc, char** argv) {
     asio::io_context io;
     Daemon daemon(io, config);
     const unsigned short port = daemon.listen();
-    spdlog::info("robocald {} listening on {}:{}", kRelease, config.listen_address, port);
+    spdlog::info("robocald {} listening on {}:{}", build::kVersion, config.listen_address, port);
     std::printf("listening %s %u\n", config.listen_address.c_str(), port);
     std::fflush(stdout);
 

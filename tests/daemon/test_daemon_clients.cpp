@@ -4,6 +4,7 @@
 #include "../drivers/cellsim_process.hpp"
 #include "daemon_process.hpp"
 
+#include <robocal/build_info.hpp>
 #include <robocal/daemon/token.hpp>
 #include <robocal/drivers/config.hpp>
 
@@ -48,6 +49,7 @@ TEST_CASE("robocald greets with VERSION and answers status, runs and result") {
   auto c = f.daemon->client();
   CHECK(c->version()["class"] == "VERSION");
   CHECK(c->version()["proto_major"] == 1);
+  CHECK(c->version()["release"] == build::kVersion);  // the project's version, from CMake
   const json s = c->request({{"cmd", "status"}});
   CHECK(s["class"] == "STATUS");
   CHECK(s["state"] == "idle");
