@@ -3,6 +3,7 @@
 // wrong: no port, no answer, wrong baud rate (garbled answer), or an answer robocal cannot read.
 #include "args.hpp"
 
+#include <robocal/build_info.hpp>
 #include <robocal/drivers/config.hpp>
 #include <robocal/drivers/diagnose.hpp>
 
@@ -23,8 +24,11 @@ PORT is a device path (/dev/ttyUSB0, /dev/serial/by-id/..., a pty), "usb-serial:
 "usb:TEXT" (an adapter's USB serial number or a part of its description; see robocal ports).
 Without --val/--bar, the ports of the config file are probed.
 
-  --config FILE         drivers config (dialects, baud rates)          [config/drivers.json if
-                                                                        present, else defaults]
+The config file is a drivers config (config/drivers.json) or robocald's own config file, whose
+"drivers" section is read as the daemon reads it. Without --config: config/drivers.json if
+present, else the daemon's %s if present, else the defaults.
+
+  --config FILE         drivers or robocald config (ports, dialects, baud rates)
   --val-baud N          override val.serial.baud
   --bar-baud N          override bar.serial.baud
   --bar-mode M          override bar.mode (polled or streamed)
@@ -58,16 +62,16 @@ int run(const std::vector<std::string>& argv) {
       argv, {"val", "bar", "config", "val-baud", "bar-baud", "bar-mode", "bar-format", "seconds"},
       {"help"});
   if (args.flag("help")) {
-    std::fputs(kHelp, stdout);
+    std::printf(kHelp, build::kDaemonConfigFile);
     return 0;
   }
+  std::string config_file = args.get("config", "");
+  if (config_file.empty())
+    for (const char* fallback : {"config/drivers.json", build::kDaemonConfigFile})
+      if (config_file.empty() && ::access(fallback, R_OK) == 0) config_file = fallback;
   drivers::DriversConfig config;
-  if (args.has("config")) {
-    config = drivers::loadDriversConfig(args.get("config", ""));
-  } else if (FILE* f = std::fopen("config/drivers.json", "r")) {
-    std::fclose(f);
-    config = drivers::loadDriversConfig("config/drivers.json");
-  }
+  if (!config_file.empty()) config = drivers::loadDriversOrDaemonConfig(config_file);
+  std::printf("Drivers config: %s\n", config_file.empty() ? "defaults" : config_file.c_str());
   bool do_val = args.has("val"), do_bar = args.has("bar");
   if (!do_val && !do_bar) do_val = do_bar = true;
   if (args.has("val")) applyPort(config.val.serial, args.get("val", ""));

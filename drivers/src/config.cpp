@@ -275,22 +275,47 @@ DriversConfig driversConfigFromJson(const json& j, const std::string& source) {
   return c;
 }
 
-DriversConfig loadDriversConfig(const std::string& path) {
+namespace {
+
+std::string readConfigFile(const std::string& path, const char* what) {
   std::ifstream in(path);
-  if (!in) throw ConfigError(path + ": cannot read the drivers configuration file");
+  if (!in) throw ConfigError(path + ": cannot read the " + what);
   std::stringstream ss;
   ss << in.rdbuf();
-  return parseDriversConfig(ss.str(), path);
+  return ss.str();
 }
 
-DriversConfig parseDriversConfig(const std::string& text, const std::string& source) {
-  json j;
+json parseConfigJson(const std::string& text, const std::string& source) {
   try {
-    j = json::parse(text);
+    return json::parse(text);
   } catch (const json::exception& e) {  // syntax errors, and numbers too large for a double
     throw ConfigError(source + ": not valid JSON: " + e.what());
   }
-  return driversConfigFromJson(j, source);
+}
+
+}  // namespace
+
+DriversConfig loadDriversConfig(const std::string& path) {
+  return parseDriversConfig(readConfigFile(path, "drivers configuration file"), path);
+}
+
+DriversConfig parseDriversConfig(const std::string& text, const std::string& source) {
+  return driversConfigFromJson(parseConfigJson(text, source), source);
+}
+
+DriversConfig parseDriversOrDaemonConfig(const std::string& text, const std::string& source) {
+  const json j = parseConfigJson(text, source);
+  // robocald.json always names its model; a drivers file has neither key.
+  if (!j.is_object() || (!j.contains("model") && !j.contains("drivers")))
+    return driversConfigFromJson(j, source);
+  const auto drivers = j.find("drivers");
+  // The daemon's source name for its section (daemon/src/config.cpp), so errors read alike.
+  return drivers == j.end() ? DriversConfig{}
+                            : driversConfigFromJson(*drivers, source + ": drivers");
+}
+
+DriversConfig loadDriversOrDaemonConfig(const std::string& path) {
+  return parseDriversOrDaemonConfig(readConfigFile(path, "configuration file"), path);
 }
 
 json toJson(const SerialConfig& c) {

@@ -68,3 +68,42 @@ TEST_CASE("Config: a number too large for a double is a ConfigError (found by fu
     CHECK_THAT(e.what(), Catch::Contains("drivers.json: not valid JSON"));
   }
 }
+
+TEST_CASE("Config: probe's reader takes robocald's config file, reading its drivers section",
+          "[drivers][config][probe]") {
+  // The shipped daemon config: its drivers section, as the daemon reads it.
+  const DriversConfig shipped =
+      loadDriversOrDaemonConfig(ROBOCAL_SOURCE_DIR "/config/robocald.json");
+  CHECK(shipped.bar.mode == "streamed");
+  CHECK(shipped.bar.serial.usb_description == "Prolific");
+  CHECK_THAT(shipped.val.serial.path, Catch::Contains("/dev/serial/by-id/"));
+  // A drivers file reads as before.
+  const DriversConfig drivers =
+      loadDriversOrDaemonConfig(ROBOCAL_SOURCE_DIR "/config/drivers.json");
+  CHECK(toJson(drivers) == toJson(loadDriversConfig(ROBOCAL_SOURCE_DIR "/config/drivers.json")));
+  // A daemon config without a drivers section: the defaults.
+  CHECK(toJson(parseDriversOrDaemonConfig(R"({"model": "m.json", "bar_hard_limit_mm": 1.8})",
+                                          "robocald.json")) == toJson(DriversConfig{}));
+  // Errors name the file and the section as the daemon's do; the daemon's other keys are not
+  // checked here, and a drivers file still refuses them.
+  auto errorOfText = [](const std::string& text) -> std::string {
+    try {
+      parseDriversOrDaemonConfig(text, "robocald.json");
+    } catch (const ConfigError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  CHECK_THAT(errorOfText(R"({"model": "m.json", "drivers": {"val": {"serial": {"baud": "x"}}}})"),
+             Catch::Contains("robocald.json: drivers: val.serial.baud: expected a whole number"));
+  CHECK(errorOfText(R"({"model": "m.json", "settle_s": "whatever"})").empty());
+  CHECK_THAT(errorOfText(R"({"val": {}, "bar_hard_limit_mm": 1.8})"),
+             Catch::Contains("bar_hard_limit_mm: unknown key"));
+  CHECK_THAT(errorOfText("{"), Catch::Contains("robocald.json: not valid JSON"));
+  try {
+    loadDriversOrDaemonConfig("/nonexistent/robocald.json");
+    FAIL("no error");
+  } catch (const ConfigError& e) {
+    CHECK_THAT(e.what(), Catch::Contains("/nonexistent/robocald.json: cannot read"));
+  }
+}

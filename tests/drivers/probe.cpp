@@ -5,10 +5,12 @@
 #include <robocal/drivers/diagnose.hpp>
 
 #include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 
 #include <sys/wait.h>
 
 #include <cstdio>
+#include <fstream>
 
 using namespace robocal::drivers;
 using robocal::test::CellSimProcess;
@@ -101,4 +103,23 @@ TEST_CASE("Probe: the robocal probe command", "[drivers][probe]") {
   INFO(bad_out);
   CHECK(bad_code == 1);
   CHECK_THAT(bad_out, Catch::Contains("garbled"));
+}
+
+TEST_CASE("Probe: the robocal probe command reads robocald's config file", "[drivers][probe]") {
+  CellSimProcess sim;
+  // robocald.json as installed, with its drivers section pointed at the simulator: probe reads
+  // that section (the daemon's other keys, unknown to a drivers file, are no error) and probes
+  // the ports it names.
+  std::ifstream shipped(ROBOCAL_SOURCE_DIR "/config/robocald.json");
+  nlohmann::json config = nlohmann::json::parse(shipped);
+  config["drivers"] = toJson(sim.driversConfig());
+  const std::string path = sim.dir() + "/robocald.json";
+  std::ofstream(path) << config.dump(2);
+  const auto [code, out] = runRobocal("probe --config " + path + " --seconds 0.3");
+  INFO(out);
+  CHECK(code == 0);
+  CHECK_THAT(out, Catch::Contains("Drivers config: " + path));
+  CHECK_THAT(out, Catch::Contains("VAL II controller on " + sim.valPath()));
+  CHECK_THAT(out, Catch::Contains("joints (deg)"));
+  CHECK_THAT(out, Catch::Contains(" mm "));
 }

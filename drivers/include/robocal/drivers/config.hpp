@@ -96,6 +96,12 @@ DriversConfig driversConfigFromJson(const nlohmann::json& json, const std::strin
 // The text of a drivers configuration file; `source` names it in errors. ConfigError.
 DriversConfig parseDriversConfig(const std::string& text, const std::string& source);
 DriversConfig loadDriversConfig(const std::string& path);
+// The same from either a drivers configuration or robocald's configuration file (an object with
+// a "model" or "drivers" key, docs/robocald.md): of the daemon's file, its "drivers" section as
+// the daemon reads it (defaults when it has none); its other keys are the daemon's to check.
+// ConfigError, naming `source` (and "drivers" for the daemon's file) and the key.
+DriversConfig parseDriversOrDaemonConfig(const std::string& text, const std::string& source);
+DriversConfig loadDriversOrDaemonConfig(const std::string& path);
 // Checks values (regexes compile, templates name known fields, numbers in range); ConfigError.
 void validate(const ValConfig& config, const std::string& where = "val");
 void validate(const BarConfig& config, const std::string& where = "bar");
