@@ -1,6 +1,7 @@
 // robocal as the operator's client of robocald: status, watch, start, confirm, pause, resume,
 // abort, result, runs. Plain `nc localhost 7687` works too: the protocol is JSON lines.
 #include "args.hpp"
+#include "daemon_view.hpp"
 
 #include <robocal/formats/error.hpp>
 #include <robocal/proto/client.hpp>
@@ -54,49 +55,32 @@ std::string token(const Args& args) {
   return t;
 }
 
-// Prints a reply; returns the exit code (1 for ERROR).
+// Prints a reply, for a person or (--json) as it came; returns the exit code (1 for ERROR).
 int show(const json& reply, bool as_json) {
+  const std::string cls = reply.value("class", "");
   if (as_json) {
     std::printf("%s\n", reply.dump().c_str());
-  } else if (reply.value("class", "") == "ERROR") {
+  } else if (cls == "ERROR") {
     std::fprintf(stderr, "robocald: %s\n", reply.value("message", "?").c_str());
     if (reply.contains("violations"))
       for (const auto& v : reply["violations"])
-        std::fprintf(stderr, "  %s\n", v.get<std::string>().c_str());
-  } else if (reply.value("class", "") == "ACK") {
+        std::fprintf(stderr, "  %s\n",
+                     v.is_string() ? v.get<std::string>().c_str() : v.dump().c_str());
+  } else if (cls == "ACK") {
     std::printf("ok: %s%s%s\n", reply.value("cmd", "").c_str(),
-                reply.contains("message") ? ": " : "", reply.value("message", "").c_str());
+                reply.value("message", "").empty() ? "" : ": ", reply.value("message", "").c_str());
+  } else if (cls == "STATUS") {
+    std::fputs(statusText(reply).c_str(), stdout);
+  } else if (cls == "RESULT") {
+    std::fputs(resultText(reply).c_str(), stdout);
+  } else if (cls == "RUNS") {
+    std::fputs(runsText(reply).c_str(), stdout);
+  } else if (cls == "PLAN") {
+    std::fputs(planText(reply).c_str(), stdout);
   } else {
     std::printf("%s\n", reply.dump(2).c_str());
   }
-  return reply.value("class", "") == "ERROR" ? 1 : 0;
-}
-
-std::string duration(double s) {
-  char buf[32];
-  const long t = static_cast<long>(s + 0.5);
-  std::snprintf(buf, sizeof buf, "%ld:%02ld:%02ld", t / 3600, (t / 60) % 60, t % 60);
-  return buf;
-}
-
-void printStatus(const json& s) {
-  std::printf("state: %s%s%s\n", s.value("state", "?").c_str(),
-              s.value("reason", "").empty() ? "" : " - ", s.value("reason", "").c_str());
-  if (!s.value("run", "").empty())
-    std::printf("run: %s   shell %d of %d   points %d of %d   time left %s\n",
-                s.value("run", "").c_str(), s.value("shell", 0), s.value("shells", 0),
-                s.value("points_done", 0), s.value("points_total", 0),
-                duration(s.value("eta_s", 0.0)).c_str());
-  if (s.contains("resumable"))
-    std::printf("resumable run: %s\n", s["resumable"].get<std::string>().c_str());
-  if (s.contains("devices"))
-    std::printf("devices: VAL II %s, ball-bar %s\n",
-                s["devices"].value("val", false) ? "connected" : "not connected",
-                s["devices"].value("bar", false) ? "connected" : "not connected");
-  if (s.contains("bar") && s["bar"].contains("deflection_mm"))
-    std::printf("bar: %+.4f mm deflection\n", s["bar"]["deflection_mm"].get<double>());
-  if (s.contains("prompt"))
-    std::printf("\n*** OPERATOR: %s ***\n", s["prompt"].value("message", "").c_str());
+  return cls == "ERROR" ? 1 : 0;
 }
 
 // The simulated operator: tells robocal-cellsim to move the bar, as a person would.
@@ -124,10 +108,13 @@ int simple(const std::vector<std::string>& argv, const char* cmd, bool with_toke
   if (with_token) req["token"] = token(args);
   if (fill) fill(args, req);
   auto client = connectTo(args);
-  const json reply = client->request(req, 30.0);
-  if (!args.flag("json") && reply.value("class", "") == "STATUS") {
-    printStatus(reply);
-    return 0;
+  // `start` answers PLAN, then ACK or ERROR: every object up to the final one is shown.
+  json reply = client->request(req, 30.0);
+  while (reply.value("class", "") == "PLAN" && std::string(cmd) == "start") {
+    show(reply, args.flag("json"));
+    auto next = client->read(30.0);
+    if (!next) throw proto::ClientError("robocald sent no ACK after the PLAN within 30 s");
+    reply = *next;
   }
   return show(reply, args.flag("json"));
 }
@@ -230,73 +217,81 @@ int watch(const std::vector<std::string>& argv) {
   auto client = connectTo(args);
   client->send({{"cmd", "watch"}, {"enable", true}});
   const auto started = std::chrono::steady_clock::now();
-  double last_bar = 0;
-  bool have_bar = false;
+  // In a terminal one live line stays at the bottom: text goes above it, and it is redrawn.
   json progress;
+  std::optional<double> bar;
+  bool live_shown = false;
+  auto last_draw = started;
+  const auto say = [&](const std::string& text) {
+    if (as_json) return;
+    if (tty && live_shown) std::fputs("\r\033[K", stdout);
+    live_shown = false;
+    std::fputs(text.c_str(), stdout);
+    std::fflush(stdout);
+  };
+  const auto drawLive = [&](bool force) {
+    if (as_json || !tty || progress.is_null()) return;
+    const auto now = std::chrono::steady_clock::now();
+    if (!force && now - last_draw < std::chrono::milliseconds(100)) return;
+    last_draw = now;
+    std::printf("\r\033[K%s", progressLine(progress, bar).c_str());
+    std::fflush(stdout);
+    live_shown = true;
+  };
+  json answered;  // the simulated operator answers each prompt once
+  const auto onPrompt = [&](const json& prompt) {
+    say(promptText(prompt) + "\n");
+    if (operator_socket.empty() || prompt == answered) return;
+    answered = prompt;
+    const auto control = [&](const std::string& c) { return cellsimControl(operator_socket, c); };
+    for (const std::string& action : proto::answerPrompt(*client, prompt, control, tok, bar_mm))
+      say("(simulated operator: " + action + ")\n");
+  };
   int exit_code = 0;
   while (true) {
     if (timeout_s > 0 &&
         std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count() >
             timeout_s) {
+      say("");
       std::fprintf(stderr, "robocal watch: timed out after %.0f s\n", timeout_s);
       return 3;
     }
     auto obj = client->read(0.5);
     if (!obj) continue;
     const std::string cls = obj->value("class", "");
-    if (as_json && cls != "BAR") std::printf("%s\n", obj->dump().c_str());
+    if (as_json) std::printf("%s\n", obj->dump().c_str());
     if (cls == "BAR") {
-      if (as_json) {
-        std::printf("%s\n", obj->dump().c_str());
-      } else if (obj->contains("deflection_mm")) {
-        last_bar = (*obj)["deflection_mm"].get<double>();
-        have_bar = true;
-      }
+      if (obj->contains("deflection_mm")) bar = (*obj)["deflection_mm"].get<double>();
+      drawLive(false);
+      continue;
+    }
+    if (cls == "STATUS") {  // on attach: where the run is, and any prompt that waits
+      progress = *obj;
+      say(stateText({{"to", obj->value("state", "?")}, {"reason", obj->value("reason", "")}}));
+      if (obj->contains("prompt") && (*obj)["prompt"].is_object()) onPrompt((*obj)["prompt"]);
     } else if (cls == "PROGRESS") {
       progress = *obj;
-    } else if (cls == "STATE" && !as_json) {
-      std::printf("%sstate: %s%s%s\n", tty ? "\r\033[K" : "", obj->value("to", "").c_str(),
-                  obj->contains("reason") ? " - " : "", obj->value("reason", "").c_str());
+    } else if (cls == "STATE") {
+      say(stateText(*obj));
     } else if (cls == "PROMPT") {
-      if (!as_json)
-        std::printf("%s\n*** OPERATOR: %s ***\n\n", tty ? "\r\033[K" : "",
-                    obj->value("message", "").c_str());
-      if (!operator_socket.empty() && obj->value("shell", 0) > 0) {
-        const auto control = [&](const std::string& c) {
-          return cellsimControl(operator_socket, c);
-        };
-        for (const std::string& action : proto::answerPrompt(*client, *obj, control, tok, bar_mm))
-          if (!as_json) std::printf("(simulated operator: %s)\n", action.c_str());
-      }
-    } else if (cls == "RESULT" && !as_json) {
-      std::printf("%s\nRESULT set %d: %zu samples, rank %d, RMS %.4f mm (before %.4f mm)",
-                  tty ? "\r\033[K" : "", obj->value("set", 0), obj->value("n", size_t{0}),
-                  obj->value("rank", 0), obj->value("rms_mm", 0.0),
-                  obj->value("rms_before_mm", 0.0));
-      if (obj->contains("validation_rms_mm"))
-        std::printf(", predicted this set before fitting it with RMS %.4f mm",
-                    (*obj)["validation_rms_mm"].get<double>());
-      std::printf("\n  calibrated model: %s\n  report: %s\n",
-                  obj->value("calibrated_file", "").c_str(), obj->value("report_dir", "").c_str());
-    } else if (cls == "ERROR" && !as_json) {
+      onPrompt(*obj);
+    } else if (cls == "RESULT") {
+      say("\nRESULT\n" + resultText(*obj));
+    } else if (cls == "ERROR") {
+      say("");
       std::fprintf(stderr, "robocald: %s\n", obj->value("message", "").c_str());
+    } else if (cls == "EVENT" && obj->value("event", "") == "connection_check" &&
+               !obj->value("ok", true)) {
+      say("connection check failed on shell " + std::to_string(obj->value("shell", 0)) + "\n");
     }
-    if (!as_json && tty && (have_bar || !progress.is_null())) {
-      const int done = progress.value("points_done", 0), total = progress.value("points_total", 0);
-      const int width = 30, filled = total > 0 ? width * done / total : 0;
-      std::printf("\r\033[K[%s%s] %d/%d shell %d/%d left %s  bar %+.4f mm",
-                  std::string(filled, '#').c_str(), std::string(width - filled, '.').c_str(), done,
-                  total, progress.value("shell", 0), progress.value("shells", 0),
-                  duration(progress.value("eta_s", 0.0)).c_str(), last_bar);
-      std::fflush(stdout);
-    }
+    drawLive(true);
     if (cls == "STATE" && until.count(obj->value("to", ""))) {
       exit_code = obj->value("to", "") == "done" ? 0 : 4;
       break;
     }
     std::fflush(stdout);
   }
-  if (tty) std::printf("\n");
+  if (tty && live_shown) std::printf("\n");
   return exit_code;
 }
 

@@ -1,0 +1,31 @@
+// How robocal shows robocald's objects to a person: plain text for a terminal or a log, one
+// function per class (STATUS, PROMPT, STATE, PROGRESS, RESULT, RUNS, PLAN). Each names the command
+// the operator types next where there is one. Pure formatting: no I/O; `--json` bypasses it all.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <optional>
+#include <string>
+
+namespace robocal::cli {
+
+// h:mm:ss
+std::string clockText(double seconds);
+
+// The pending prompt in large, plain words in a box, with the commands to type.
+std::string promptText(const nlohmann::json& prompt);
+
+// A STATE change ("state: paused - <reason>") and, where the run waits for the operator, what to
+// type next.
+std::string stateText(const nlohmann::json& state_event);
+
+// The live line: `[#####.....] 25/108  shell 3/9 B1C3  left 0:03:25  bar +0.090 mm`.
+std::string progressLine(const nlohmann::json& progress, std::optional<double> bar_mm);
+
+std::string statusText(const nlohmann::json& status);
+std::string resultText(const nlohmann::json& result);
+std::string runsText(const nlohmann::json& runs);
+std::string planText(const nlohmann::json& plan);
+
+}  // namespace robocal::cli
