@@ -51,10 +51,7 @@ int run(const std::vector<std::string>& argv) {
   const double plan_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
-  const PlanIdentifiability id = planIdentifiability(model, plan);
-  plan.summary.rank = id.rank;
-  plan.summary.expected_rank = id.expected_rank;
-  plan.summary.condition_number = id.condition_number;
+  summarizeIdentifiability(model, plan);
 
   // The forecast: the plan run by robots that differ from the model as the cell assumes.
   const ModelUncertainty& u = cell.uncertainty;
@@ -97,8 +94,8 @@ int run(const std::vector<std::string>& argv) {
       sum.shells, sum.points, sum.vias, sum.dropped, sum.duration_s / 3600.0,
       cell.motion.joint_speed_deg_per_s, cell.motion.settle_s, sum.max_deviation_mm,
       cell.motion.via_tolerance_mm);
-  std::printf("identification: rank %d of %d, condition number %.3g", id.rank, id.expected_rank,
-              id.condition_number);
+  std::printf("identification: rank %d of %d, condition number %.3g", plan.summary.rank,
+              plan.summary.expected_rank, plan.summary.condition_number);
   for (double e : cell.bar.extension_lengths_mm) {
     const PlanIdentifiability part = planIdentifiability(model, plan, e);
     std::printf("; extension %.0f mm alone: rank %d, condition %.3g", e, part.rank,
@@ -113,9 +110,9 @@ int run(const std::vector<std::string>& argv) {
         "connect pose (range +/-%.2f mm)\n",
         u.translation_sigma_mm, u.link_angle_sigma_deg, u.joint_offset_sigma_deg, u.gain_sigma,
         u.models, sum.predicted_deflection_mm, sum.predicted_change_mm, cell.bar.max_deflection_mm);
-  if (id.rank < id.expected_rank)
-    std::printf("warning: the plan identifies only %d of the %d independent parameters\n", id.rank,
-                id.expected_rank);
+  if (plan.summary.rank < plan.summary.expected_rank)
+    std::printf("warning: the plan identifies only %d of the %d independent parameters\n",
+                plan.summary.rank, plan.summary.expected_rank);
   if (sum.predicted_change_mm > cell.bar.max_deflection_mm)
     std::printf(
         "warning: with that model error the bar can leave its range: run it with the "

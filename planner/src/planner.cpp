@@ -852,6 +852,13 @@ PlanIdentifiability planIdentifiability(const Model& model, const Plan& plan, do
   return out;
 }
 
+void summarizeIdentifiability(const Model& model, Plan& plan) {
+  const PlanIdentifiability id = planIdentifiability(model, plan);
+  plan.summary.rank = id.rank;
+  plan.summary.expected_rank = id.expected_rank;
+  plan.summary.condition_number = id.condition_number;
+}
+
 void predictDeflections(const Model& nominal, const std::vector<Model>& truths, Plan& plan) {
   (void)nominal;
   for (ShellPlan& shell : plan.shells) {

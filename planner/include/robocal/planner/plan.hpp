@@ -169,6 +169,9 @@ struct PlanIdentifiability {
 };
 PlanIdentifiability planIdentifiability(const Model& model, const Plan& plan,
                                         double extension_mm = -1);
+// The plan's summary gets the rank and condition number of all its points (what `robocal plan`
+// writes and robocald's PLAN reports).
+void summarizeIdentifiability(const Model& model, Plan& plan);
 
 // Worst |bar deflection| per shell for the given true robots: the largest |true distance minus
 // the radius| over the connect pose and every step, plus the shell's worst nominal deviation
