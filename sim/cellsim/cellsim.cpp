@@ -296,6 +296,8 @@ class Cell {
           drop_next_ = true;
         else if (f == "noprobe")
           no_probe_ = !(w.size() > 2 && w[2] == "off");
+        else if (f == "loose")  // a ball loose in its socket: the attached bar reads unsteadily
+          loose_ = !(w.size() > 2 && w[2] == "off");
         else if (f == "error") {
           std::string msg;
           for (std::size_t i = 2; i < w.size(); ++i) msg += (msg.empty() ? "" : " ") + w[i];
@@ -305,7 +307,8 @@ class Cell {
         } else if (f == "disconnect" && w.size() >= 3) {
           disconnect(port(w[2]), seconds(3, o_.reconnect_after_s));
         } else {
-          return "error: unknown fault (garbage, drop, noprobe [off], error [TEXT], stall val|bar "
+          return "error: unknown fault (garbage, drop, noprobe [off], loose [off], error [TEXT], "
+                 "stall val|bar "
                  "S, "
                  "disconnect val|bar S)";
         }
@@ -629,8 +632,9 @@ class Cell {
     const double d = deflection(connected);
     if (connected && std::abs(d) > o_.range_mm)
       return drivers::formatBarStatus(BarLineKind::kOverRange, d < 0);
-    std::normal_distribution<double> noise(0.0, o_.noise_mm);
-    const double value_mm = d + (o_.noise_mm > 0 ? noise(rng_) : 0.0);
+    std::normal_distribution<double> noise(0.0, o_.noise_mm), play(0.0, kLoosePlayMm);
+    const double value_mm =
+        d + (o_.noise_mm > 0 ? noise(rng_) : 0.0) + (loose_ && connected ? play(rng_) : 0.0);
     return drivers::formatBarReading(bar_config_.format, value_mm / bar_config_.unit_scale_mm);
   }
 
@@ -676,7 +680,8 @@ class Cell {
   std::string error_next_;
   // bar
   Connection connection_;
-  bool connected_ = false, over_ = false, no_probe_ = false;
+  bool connected_ = false, over_ = false, no_probe_ = false, loose_ = false;
+  static constexpr double kLoosePlayMm = 0.25;  // 1 sigma of a loose ball's play
   std::string connection_name_ = "none";
   double bar_mm_ = 100, extension_mm_ = 0;
   std::vector<BrokenEvent> events_;

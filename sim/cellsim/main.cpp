@@ -16,7 +16,7 @@ constexpr const char* kHelp = R"(usage: robocal-cellsim --model TRUTH.json [opti
 A simulated robot cell on two pseudo-terminals: a VAL II controller and a ball-bar reader.
 Prints "val PATH", "bar PATH" (and "control PATH"), then "ready". Control commands, one per
 line on the control socket or stdin: status | events | connect B1C2 [extension_mm=E] [bar_mm=L|here] |
-connect none | estop | reset | fault garbage|drop [val] | fault noprobe [off] | fault error [TEXT] |
+connect none | estop | reset | fault garbage|drop [val] | fault noprobe [off] | fault loose [off] | fault error [TEXT] |
 fault stall val|bar S | fault disconnect val|bar S | quit
 
   --model FILE               the true robot (model format, e.g. truth.json)       required
