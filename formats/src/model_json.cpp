@@ -75,9 +75,74 @@ class Reader {
     return it->get<std::string>();
   }
 
+  std::vector<std::string> optionalStrings(const json& obj, const std::string& where,
+                                           const char* key) const {
+    std::vector<std::string> out;
+    const auto it = obj.find(key);
+    if (it == obj.end()) return out;
+    const std::string path = where + "." + key;
+    if (!it->is_array()) fail(path, std::string("expected an array, got ") + typeName(*it));
+    for (size_t i = 0; i < it->size(); ++i) {
+      const json& v = (*it)[i];
+      if (!v.is_string())
+        fail(path + "[" + std::to_string(i) + "]",
+             std::string("expected a string, got ") + typeName(v));
+      out.push_back(v.get<std::string>());
+    }
+    return out;
+  }
+
+  // A whole number from 0 to `max`; 0 when the key is absent.
+  long long optionalCount(const json& obj, const std::string& where, const char* key,
+                          long long max) const {
+    const auto it = obj.find(key);
+    if (it == obj.end()) return 0;
+    const double v = numberValue(*it, where + "." + key);
+    if (v < 0 || v > static_cast<double>(max) || v != std::floor(v))
+      fail(where + "." + key, "expected a whole number from 0 to " + std::to_string(max));
+    return static_cast<long long>(v);
+  }
+
+  double optionalNumber(const json& obj, const std::string& where, const char* key) const {
+    return obj.contains(key) ? number(obj, where, key) : 0.0;
+  }
+
  private:
   std::string source_;
 };
+
+ModelProvenance provenanceFromJson(const Reader& r, const json& value) {
+  const std::string where = "provenance";
+  r.object(value, where);
+  ModelProvenance p;
+  p.run_id = r.optionalString(value, where, "run_id", "");
+  p.date_utc = r.optionalString(value, where, "date_utc", "");
+  p.nominal_name = r.optionalString(value, where, "nominal", "");
+  p.samples_files = r.optionalStrings(value, where, "samples_files");
+  p.samples = static_cast<std::size_t>(r.optionalCount(value, where, "n_samples", 1LL << 50));
+  p.rms_mm = r.optionalNumber(value, where, "rms_mm");
+  p.rank = static_cast<int>(r.optionalCount(value, where, "rank", kParamCount));
+  p.expected_rank = static_cast<int>(r.optionalCount(value, where, "expected_rank", kParamCount));
+  p.robocal_version = r.optionalString(value, where, "robocal_version", "");
+  p.warnings = r.optionalStrings(value, where, "warnings");
+  return p;
+}
+
+nlohmann::ordered_json provenanceToJson(const ModelProvenance& p) {
+  using ojson = nlohmann::ordered_json;
+  ojson out = ojson::object();
+  if (!p.run_id.empty()) out["run_id"] = p.run_id;
+  out["date_utc"] = p.date_utc;
+  out["nominal"] = p.nominal_name;
+  out["samples_files"] = p.samples_files;
+  out["n_samples"] = p.samples;
+  out["rms_mm"] = p.rms_mm;
+  out["rank"] = p.rank;
+  out["expected_rank"] = p.expected_rank;
+  out["robocal_version"] = p.robocal_version;
+  out["warnings"] = p.warnings;
+  return out;
+}
 
 }  // namespace
 
@@ -86,6 +151,8 @@ Model modelFromJson(const json& root, const std::string& source) {
   r.object(root, "top level");
   Model m;
   m.name = r.optionalString(root, "", "name", "");
+  if (const auto it = root.find("provenance"); it != root.end())
+    m.provenance = provenanceFromJson(r, *it);
 
   const json& links = r.array(root, "links", kLinkCount);
   for (int k = 0; k < kLinkCount; ++k) {
@@ -138,6 +205,7 @@ nlohmann::ordered_json modelToJson(const Model& m) {
   using ojson = nlohmann::ordered_json;
   ojson out = ojson::object();
   out["name"] = m.name;
+  if (m.provenance) out["provenance"] = provenanceToJson(*m.provenance);
   ojson links = ojson::array();
   for (const LinkParams& l : m.links)
     links.push_back(ojson{{"name", l.name},

@@ -40,6 +40,52 @@ TEST_CASE("a model survives the round trip through its file format exactly") {
   CHECK(back.chucks_mm[2] == m.chucks_mm[2]);
 }
 
+TEST_CASE("a calibrated model's provenance survives the round trip, older files have none") {
+  Model m = puma560NominalModel();
+  CHECK_FALSE(parseModel(shipped()).provenance);  // a file without one reads as before
+  CHECK(formatModel(m).find("provenance") == std::string::npos);
+  ModelProvenance p;
+  p.run_id = "20261201-204254";
+  p.date_utc = "2026-12-01T20:42:54Z";
+  p.nominal_name = m.name;
+  p.samples_files = {"/var/lib/robocald/runs/20261201-204254/samples.csv"};
+  p.samples = 1612;
+  p.rms_mm = 0.0299123456789;
+  p.rank = 36;
+  p.expected_rank = 36;
+  p.robocal_version = "0.1.0";
+  p.warnings = {"a warning"};
+  m.provenance = p;
+  const Model back = parseModel(formatModel(m));
+  REQUIRE(back.provenance);
+  const ModelProvenance& q = *back.provenance;
+  CHECK(q.run_id == p.run_id);
+  CHECK(q.date_utc == p.date_utc);
+  CHECK(q.nominal_name == p.nominal_name);
+  CHECK(q.samples_files == p.samples_files);
+  CHECK(q.samples == p.samples);
+  CHECK(q.rms_mm == p.rms_mm);
+  CHECK(q.rank == p.rank);
+  CHECK(q.expected_rank == p.expected_rank);
+  CHECK(q.robocal_version == p.robocal_version);
+  CHECK(q.warnings == p.warnings);
+  CHECK(formatModel(back) == formatModel(m));
+  // Keys a later version may add are ignored; the known ones are checked.
+  CHECK(parseModel(edited([](auto& j) {
+          j["provenance"] = {{"rank", 30}, {"new_key", 1}};
+        })).provenance->rank == 30);
+  CHECK_THROWS_WITH(parseModel(edited([](auto& j) { j["provenance"] = "x"; }), "m.json"),
+                    Contains("m.json: provenance: expected an object"));
+  CHECK_THROWS_WITH(parseModel(edited([](auto& j) {
+                      j["provenance"] = {{"rank", 3.5}};
+                    })),
+                    Contains("provenance.rank: expected a whole number"));
+  CHECK_THROWS_WITH(parseModel(edited([](auto& j) {
+                      j["provenance"] = {{"samples_files", {1}}};
+                    })),
+                    Contains("provenance.samples_files[0]: expected a string"));
+}
+
 TEST_CASE("bad model files name the key and the problem") {
   CHECK_THROWS_WITH(parseModel("{", "m.json"), Contains("m.json: not valid JSON"));
   CHECK_THROWS_WITH(parseModel("[]", "m.json"), Contains("expected an object"));

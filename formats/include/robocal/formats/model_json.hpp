@@ -1,4 +1,5 @@
-// The model file (docs/model-format.md): JSON with name, links[7], joints[6], balls[3], chucks[3].
+// The model file (docs/model-format.md): JSON with name, links[7], joints[6], balls[3], chucks[3],
+// and for a calibrated model its provenance (optional; older files have none).
 #pragma once
 
 #include <robocal/formats/error.hpp>

@@ -12,7 +12,10 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <array>
+#include <cstddef>
+#include <optional>
 #include <string>
+#include <vector>
 
 namespace robocal {
 
@@ -39,8 +42,25 @@ struct JointParams {
   double max_deg = 180;
 };
 
+// Where a calibrated model came from: the fit that made it (docs/model-format.md, "provenance").
+// Written with every calibrated model; carried unchanged through a read and a write; absent from
+// nominal models and from files older than it.
+struct ModelProvenance {
+  std::string run_id;        // the robocald run, "" when the fit was not of a run
+  std::string date_utc;      // when the model was made, ISO 8601: 2026-12-01T20:42:54Z
+  std::string nominal_name;  // the starting model's name
+  std::vector<std::string> samples_files;
+  std::size_t samples = 0;  // samples fitted
+  double rms_mm = 0;        // RMS residual of the fit
+  int rank = 0;             // parameters estimated
+  int expected_rank = 0;    // independent parameters of the robot (36 for six revolute joints)
+  std::string robocal_version;
+  std::vector<std::string> warnings;  // the fit's problems, when the model was written despite them
+};
+
 struct Model {
   std::string name;
+  std::optional<ModelProvenance> provenance;
   std::array<LinkParams, kLinkCount> links;
   std::array<JointParams, kJointCount> joints;
   std::array<Eigen::Vector3d, kBallCount> balls_mm;    // in the last link's frame (after L6)
