@@ -42,12 +42,6 @@ std::string joinNames(const std::vector<int>& indices) {
   return out.empty() ? "none" : out;
 }
 
-std::string joinConnections(const std::vector<Connection>& cs) {
-  std::string out;
-  for (const auto& c : cs) out += (out.empty() ? "" : ",") + connectionName(c);
-  return out;
-}
-
 // The Jacobian of one shell per connection, as an upper-triangular factor, and the sample count.
 struct ShellFactor {
   Eigen::MatrixXd r;
@@ -89,7 +83,7 @@ nlohmann::json resultJson(const Identifiability& id, const std::vector<Connectio
   nlohmann::json sv = nlohmann::json::array();
   for (Eigen::Index i = 0; i < id.singular_values.size(); ++i) sv.push_back(id.singular_values[i]);
   return {{"class", "IDENTIFY"},
-          {"connections", joinConnections(cs)},
+          {"connections", connectionList(cs)},
           {"samples", samples},
           {"rank", id.rank},
           {"parameters", kParamCount},
@@ -102,7 +96,7 @@ nlohmann::json resultJson(const Identifiability& id, const std::vector<Connectio
 }
 
 void printResult(const Identifiability& id, const std::vector<Connection>& cs, size_t samples) {
-  std::printf("connections: %s (%zu shells, %zu samples)\n", joinConnections(cs).c_str(), cs.size(),
+  std::printf("connections: %s (%zu shells, %zu samples)\n", connectionList(cs).c_str(), cs.size(),
               samples);
   std::printf("rank: %d of %d parameters (expected N = 5R + 3P + 6 = %d)\n", id.rank, kParamCount,
               id.expected);
@@ -158,14 +152,13 @@ int runTable(const Model& model, const Args& args, std::mt19937_64& rng) {
                           {"combinations", nlohmann::json::array()}};
     for (const auto& p : paper) {
       const Row& r = find(p);
-      out["paper_rows"].push_back({{"connections", joinConnections(r.connections)},
+      out["paper_rows"].push_back({{"connections", connectionList(r.connections)},
                                    {"rank", r.id.rank},
                                    {"redundant", names(r.id.redundant)}});
     }
     for (const Row& r : rows)
-      out["combinations"].push_back({{"connections", joinConnections(r.connections)},
-                                     {"rank", r.id.rank},
-                                     {"gap", r.id.gap}});
+      out["combinations"].push_back(
+          {{"connections", connectionList(r.connections)}, {"rank", r.id.rank}, {"gap", r.id.gap}});
     out["six_of_nine"] = {{"total", six_total}, {"rank_36", six_full}};
     std::printf("%s\n", out.dump().c_str());
     return 0;
@@ -175,7 +168,7 @@ int runTable(const Model& model, const Args& args, std::mt19937_64& rng) {
               args.number("bar-mm", kDefaultBarMm) + args.number("extension-mm", 0));
   for (const auto& p : paper) {
     const Row& r = find(p);
-    std::printf("  %-44s rank %2d  gap %.2g\n", joinConnections(r.connections).c_str(), r.id.rank,
+    std::printf("  %-44s rank %2d  gap %.2g\n", connectionList(r.connections).c_str(), r.id.rank,
                 r.id.gap);
   }
   std::printf("  any six of nine: %d of %d subsets reach rank %d\n\n", six_full, six_total,
@@ -189,7 +182,7 @@ int runTable(const Model& model, const Args& args, std::mt19937_64& rng) {
   for (const auto& [rank, sizes] : by_rank) {
     std::printf("\n-- rank %d --\n", rank);
     for (const Row& r : rows)
-      if (r.id.rank == rank) std::printf("  %s\n", joinConnections(r.connections).c_str());
+      if (r.id.rank == rank) std::printf("  %s\n", connectionList(r.connections).c_str());
   }
   return 0;
 }

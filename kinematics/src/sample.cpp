@@ -9,6 +9,12 @@ std::string connectionName(const Connection& c) {
   return "B" + std::to_string(c.ball_index + 1) + "C" + std::to_string(c.chuck_index + 1);
 }
 
+std::string connectionList(const std::vector<Connection>& connections) {
+  std::string out;
+  for (const Connection& c : connections) out += (out.empty() ? "" : ",") + connectionName(c);
+  return out;
+}
+
 std::vector<Connection> allConnections() {
   std::vector<Connection> all;
   for (int b = 0; b < kBallCount; ++b)

@@ -30,6 +30,8 @@ struct Connection {
 };
 
 std::string connectionName(const Connection& c);
+// "B1C1,B2C3": the names joined with commas, as parseConnections reads them.
+std::string connectionList(const std::vector<Connection>& connections);
 // "all" or a comma list like "B1C1,B2C3"; throws std::invalid_argument naming the bad item.
 std::vector<Connection> parseConnections(const std::string& text);
 std::vector<Connection> allConnections();
