@@ -3,7 +3,10 @@
 #include <robocal/kinematics/kinematics.hpp>
 #include <robocal/kinematics/puma560.hpp>
 #include <robocal/sim/measurements.hpp>
+#include <robocal/solver/assessment.hpp>
 #include <robocal/solver/calibrate.hpp>
+
+#include <numbers>
 
 using namespace robocal;
 
@@ -171,4 +174,93 @@ TEST_CASE("an outlier is found by its residual") {
 
 TEST_CASE("no samples is a clear error") {
   CHECK_THROWS_AS(solveCalibration(puma560NominalModel(), {}), std::invalid_argument);
+}
+
+TEST_CASE("the assessment: the fit's parameters, uncertainties and shells in interface units") {
+  const Model nominal = puma560NominalModel();
+  const Model truth = perturbed(1.0, 71);
+  const auto samples = measure(truth, planShells(nominal, "all", 0, 60, 20), 0.084, 21);
+  const FitAssessment a = assessFit(nominal, samples);
+  CHECK(a.problems.empty());
+  CHECK(a.samples.size() == samples.size());
+  CHECK(toParams(a.calibrated).isApprox(a.fit.params, 1e-14));
+  CHECK(a.connections.size() == 9);
+  REQUIRE(a.parameters.size() == kParamCount);
+  int estimated = 0;
+  for (const ParameterRow& p : a.parameters) {
+    const int i = p.index;
+    CHECK(p.nominal == paramInterfaceValue(toParams(nominal), i));
+    CHECK(p.calibrated == paramInterfaceValue(a.fit.params, i));
+    const bool free = std::count(a.fit.free_params.begin(), a.fit.free_params.end(), i) == 1;
+    CHECK(p.estimated == free);
+    estimated += p.estimated;
+    const double scale = paramKind(i) == ParamKind::kAngle ? 180.0 / std::numbers::pi : 1.0;
+    CHECK(p.sigma == Approx(std::sqrt(a.fit.covariance(i, i)) * scale));
+    if (!p.estimated) CHECK(p.change() == 0.0);
+  }
+  CHECK(estimated == 36);
+  REQUIRE(a.shells.shells.size() == 9);
+  size_t counted = 0;
+  for (const ShellResiduals& s : a.shells.shells) counted += s.stats.count;
+  CHECK(counted == samples.size());
+  CHECK(a.predicted_ball_error_rms_mm > 0);
+  CHECK(a.predicted_ball_error_rms_mm < a.fit.before.rms_mm);
+}
+
+TEST_CASE("the assessment says why a fit is not usable as a calibration") {
+  const Model nominal = puma560NominalModel();
+  const Model truth = perturbed(1.0, 72);
+  SECTION("below the expected rank") {
+    const auto samples = measure(truth, planShells(nominal, "B1C1,B2C2", 0, 60, 22), 0.084, 23);
+    const FitAssessment a = assessFit(nominal, samples);
+    REQUIRE(a.problems.size() == 1);
+    CHECK_THAT(a.problems[0], Catch::Contains("rank " + std::to_string(a.fit.identifiability.rank) +
+                                              " of the 36") &&
+                                  Catch::Contains("(B1C1,B2C2)"));
+  }
+  SECTION("a predicted error above the nominal's") {
+    const auto samples = measure(truth, planShells(nominal, "all", 0, 6, 24), 1.5, 25);
+    const FitAssessment a = assessFit(nominal, samples);
+    CHECK(a.fit.identifiability.rank == 36);
+    REQUIRE(a.problems.size() == 1);
+    CHECK_THAT(a.problems[0], Catch::Contains("exceeds the nominal model's error"));
+  }
+}
+
+TEST_CASE("held-out samples are predicted by the given model, or by the fit") {
+  const Model nominal = puma560NominalModel();
+  const Model truth = perturbed(1.0, 73);
+  const auto samples = measure(truth, planShells(nominal, "all", 0, 40, 26), 0.084, 27);
+  const auto later = measure(truth, planShells(nominal, "all", 150, 20, 28), 0.084, 29);
+  AssessOptions options;
+  options.validation = HeldOutSamples{later, nominal, "set 2 predicted by the nominal"};
+  FitAssessment a = assessFit(nominal, samples, options);
+  REQUIRE(a.validation);
+  CHECK(a.validation->residuals == sampleResiduals(nominal, later));
+  CHECK(a.validation->description == "set 2 predicted by the nominal");
+  options.validation->predictor.reset();
+  a = assessFit(nominal, samples, options);
+  CHECK(a.validation->residuals == sampleResiduals(a.calibrated, later));
+  CHECK(a.validation->shells.shells.size() == 9);
+}
+
+TEST_CASE("the shell table names the worst shells and the one that stands out") {
+  std::vector<Sample> samples;
+  std::vector<double> r;
+  for (int shell = 1; shell <= 5; ++shell)
+    for (int k = 0; k < 10; ++k) {
+      Sample s;
+      s.shell = shell;
+      s.ball_index = shell % 3;
+      samples.push_back(s);
+      const double size = shell == 3 ? 0.067 : 0.014 + 0.004 * shell;  // 0.018 ... 0.034
+      r.push_back(k % 2 ? size : -size);
+    }
+  const ShellTable t = shellTable(samples, Eigen::Map<Eigen::VectorXd>(r.data(), r.size()));
+  REQUIRE(t.shells.size() == 5);
+  CHECK(t.shells[2].shell == 3);
+  CHECK(t.shells[2].stats.rms_mm == Approx(0.067));
+  CHECK(t.shells[2].stands_out);
+  for (int k : {0, 1, 3, 4}) CHECK_FALSE(t.shells[k].stands_out);
+  CHECK(t.worst == std::vector<int>{2, 4, 3});
 }

@@ -1,0 +1,167 @@
+#include <robocal/solver/assessment.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <numeric>
+#include <tuple>
+
+namespace robocal {
+namespace {
+
+std::string number(const char* format, double value) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, format, value);
+  return buf;
+}
+
+std::vector<Connection> connectionsOf(const std::vector<Sample>& samples) {
+  std::vector<Connection> out;
+  for (const Connection& c : allConnections())
+    if (std::any_of(samples.begin(), samples.end(), [&](const Sample& s) {
+          return s.ball_index == c.ball_index && s.chuck_index == c.chuck_index;
+        }))
+      out.push_back(c);
+  return out;
+}
+
+std::vector<ParameterRow> parameterTable(const Model& nominal, const SolveResult& fit) {
+  const ParamVector start = toParams(nominal);
+  ParamVector sigma;
+  for (int i = 0; i < kParamCount; ++i) sigma[i] = std::sqrt(std::max(0.0, fit.covariance(i, i)));
+  std::vector<ParameterRow> rows;
+  for (int i = 0; i < kParamCount; ++i) {
+    ParameterRow row;
+    row.index = i;
+    row.nominal = paramInterfaceValue(start, i);
+    row.calibrated = paramInterfaceValue(fit.params, i);
+    row.estimated = std::binary_search(fit.free_params.begin(), fit.free_params.end(), i);
+    row.sigma = row.estimated ? paramInterfaceValue(sigma, i) : 0.0;
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+// The problems that make the calibrated model unfit to replace the nominal.
+std::vector<std::string> problemsOf(const FitAssessment& a) {
+  std::vector<std::string> out;
+  const Identifiability& id = a.fit.identifiability;
+  if (id.rank < id.expected) {
+    const auto& cs = a.connections;
+    out.push_back("rank " + std::to_string(id.rank) + " of the " + std::to_string(id.expected) +
+                  " independent parameters: these " + std::to_string(a.samples.size()) +
+                  " samples on " + std::to_string(cs.size()) + " of the 9 connections (" +
+                  connectionList(cs) + ") leave " + std::to_string(id.expected - id.rank) +
+                  " of them unidentified, held at nominal, so the model is only partly "
+                  "calibrated; measure all nine connections, or six that use every ball and "
+                  "every chuck, on enough points (docs/identifiability.md)");
+  }
+  const double nominal_mm = a.fit.before.rms_mm;
+  if (!(a.predicted_ball_error_rms_mm <= nominal_mm))
+    out.push_back("the predicted 1-sigma ball-position error, RMS " +
+                  number("%.4g", a.predicted_ball_error_rms_mm) +
+                  " mm, exceeds the nominal model's error on these samples (RMS residual " +
+                  number("%.4g", nominal_mm) +
+                  " mm): the data cannot pin the parameters, so the calibrated model could be "
+                  "less accurate than the nominal; measure more points");
+  return out;
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const size_t mid = v.size() / 2;
+  return v.size() % 2 ? v[mid] : 0.5 * (v[mid - 1] + v[mid]);
+}
+
+}  // namespace
+
+ShellTable shellTable(const std::vector<Sample>& samples, const Eigen::VectorXd& residuals) {
+  // A shell is its number, connection and extension (files of other runs may reuse numbers).
+  std::map<std::tuple<int, int, int, double>, std::vector<double>> groups;
+  for (size_t i = 0; i < samples.size(); ++i) {
+    const Sample& s = samples[i];
+    groups[{s.shell, s.ball_index, s.chuck_index, s.extension_mm}].push_back(
+        residuals[static_cast<Eigen::Index>(i)]);
+  }
+  ShellTable table;
+  std::vector<double> rms;
+  for (const auto& [key, r] : groups) {
+    ShellResiduals shell;
+    std::tie(shell.shell, shell.connection.ball_index, shell.connection.chuck_index,
+             shell.extension_mm) = key;
+    shell.stats = residualStats(Eigen::Map<const Eigen::VectorXd>(r.data(), r.size()));
+    rms.push_back(shell.stats.rms_mm);
+    table.shells.push_back(shell);
+  }
+  const double typical = median(rms);
+  for (ShellResiduals& shell : table.shells) {
+    shell.rms_to_median = typical > 0 ? shell.stats.rms_mm / typical : 1.0;
+    shell.stands_out = table.shells.size() > 1 && shell.rms_to_median >= kShellStandsOut;
+  }
+  table.worst.resize(table.shells.size());
+  std::iota(table.worst.begin(), table.worst.end(), 0);
+  std::stable_sort(table.worst.begin(), table.worst.end(), [&](int a, int b) {
+    return table.shells[a].stats.rms_mm > table.shells[b].stats.rms_mm;
+  });
+  table.worst.resize(std::min<size_t>(table.worst.size(), kWorstShellsNamed));
+  return table;
+}
+
+FitAssessment assessFit(const Model& nominal, std::vector<Sample> samples,
+                        const AssessOptions& options) {
+  FitAssessment a;
+  a.nominal = nominal;
+  a.outlier_sigmas = options.outlier_sigmas;
+  a.fit = solveCalibration(nominal, samples, options.solve);
+  const std::vector<Outlier> outliers = findOutliers(a.fit.residuals, options.outlier_sigmas);
+  for (const Outlier& o : outliers)
+    a.outliers.push_back({samples[o.index], o.residual_mm, o.robust_sigmas});
+  if (options.drop_outliers && !outliers.empty()) {
+    std::vector<Sample> kept;
+    size_t next = 0;
+    for (size_t i = 0; i < samples.size(); ++i) {
+      if (next < outliers.size() && outliers[next].index == i)
+        ++next;
+      else
+        kept.push_back(samples[i]);
+    }
+    samples.swap(kept);
+    a.outliers_dropped = true;
+    a.fit = solveCalibration(nominal, samples, options.solve);
+  }
+  a.samples = std::move(samples);
+  a.calibrated = withParams(nominal, a.fit.params);
+  a.calibrated.provenance.reset();  // the nominal's, if it had one, is not this model's
+
+  const std::vector<double> errors = predictedBallErrors(a.calibrated, a.fit.covariance, a.samples);
+  double sum = 0;
+  for (double e : errors) {
+    sum += e * e;
+    a.predicted_ball_error_max_mm = std::max(a.predicted_ball_error_max_mm, e);
+  }
+  a.predicted_ball_error_rms_mm = std::sqrt(sum / std::max<size_t>(1, errors.size()));
+  a.bar_to_endpoint_factor = barToEndpointErrorFactor(a.calibrated, a.samples);
+  a.parameters = parameterTable(nominal, a.fit);
+  a.shells = shellTable(a.samples, a.fit.residuals);
+  a.connections = connectionsOf(a.samples);
+  a.problems = problemsOf(a);
+
+  if (options.validation) {
+    const HeldOutSamples& held = *options.validation;
+    ValidationResult v;
+    v.description = held.description;
+    v.samples = held.samples;
+    v.residuals = sampleResiduals(held.predictor ? *held.predictor : a.calibrated, v.samples);
+    v.stats = residualStats(v.residuals);
+    v.shells = shellTable(v.samples, v.residuals);
+    a.validation = std::move(v);
+  }
+  if (options.truth)
+    a.truth = compareWithTruth(nominal, a.calibrated, *options.truth,
+                               a.validation ? a.validation->samples : a.samples);
+  return a;
+}
+
+}  // namespace robocal
