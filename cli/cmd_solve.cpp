@@ -1,12 +1,15 @@
-// robocal solve: identify the parameters from samples, with validation, outliers and a report.
+// robocal solve: identify the parameters from samples, assess the fit (solver/assessment.hpp, the
+// same assessment robocald makes of each shell set), and write the calibrated model only when the
+// fit is usable as a calibration (or --allow-partial), with a report.
 #include "args.hpp"
 
 #include <robocal/formats/model_json.hpp>
 #include <robocal/formats/report.hpp>
 #include <robocal/formats/samples_csv.hpp>
-#include <robocal/solver/calibrate.hpp>
+#include <robocal/solver/assessment.hpp>
 
 #include <cstdio>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 
 namespace robocal::cli {
@@ -18,112 +21,83 @@ constexpr const char* kHelp =
 
 Fits the 54-parameter model to ball-bar samples with Levenberg-Marquardt, starting from the
 nominal model. The parameters the data cannot identify stay at their nominal values (listed).
+Prints the fit, the residual per shell (the worst shells named), and every parameter: nominal,
+calibrated, change and 1-sigma.
+
+The calibrated model is written only when the fit is usable: the rank reaches the robot's
+independent parameters (36 for six revolute joints) and the predicted ball-position error is
+below the nominal model's error on the samples. Otherwise robocal solve says what and why, writes
+no model and exits with 3, unless --allow-partial is given.
 
   --model FILE            starting (nominal) model                                required
-  --out FILE              calibrated model to write (model format)
+  --out FILE              calibrated model to write (model format, with its provenance)
+  --allow-partial         write the model even when the fit is not usable (warns; the
+                          model's provenance lists the problems)
   --validate FILE         held-out samples: RMS with the calibrated model, no refit
-  --report DIR            write report.json and the residual figures (SVG) to DIR
+  --report DIR            write summary.html, report.json and the figures (SVG) to DIR
   --outlier-sigmas K      report samples beyond K robust sigmas                   [5]
   --drop-outliers         drop the reported outliers and refit (listed, never silent)
   --truth FILE            a simulation's true model: report the ball-position error
                           of the nominal and calibrated models against it
   --max-iterations N      LM iteration cap                                         [100]
   --json                  one JSON object instead of text
+
+exit status: 0 fitted (model written with --out), 1 an unreadable input, 2 a usage error,
+             3 the fit is not usable (rank below 36 or a predicted error above the
+             nominal's): no model written
 )";
+
+constexpr int kExitNotUsable = 3;
 
 std::string where(const Sample& s) {
   return s.source + ":" + std::to_string(s.source_line);
 }
 
-int run(const std::vector<std::string>& argv) {
-  const Args args(
-      argv, {"model", "out", "validate", "report", "outlier-sigmas", "truth", "max-iterations"},
-      {"json", "drop-outliers", "help"});
-  if (args.flag("help")) {
-    std::fputs(kHelp, stdout);
-    return 0;
+void printShells(const ShellTable& table) {
+  std::printf("  shell  connection        n   RMS (mm)   max (mm)  mean (mm)  RMS/median\n");
+  for (const ShellResiduals& s : table.shells)
+    std::printf("  %5d  %-14s %4zu   %8.4f   %8.4f   %+8.4f      %6.2f%s\n", s.shell,
+                shellConnectionText(s).c_str(), s.stats.count, s.stats.rms_mm, s.stats.max_abs_mm,
+                s.stats.mean_mm, s.rms_to_median, s.stands_out ? "  !" : "");
+  std::printf("  worst shells:");
+  for (size_t k = 0; k < table.worst.size(); ++k) {
+    const ShellResiduals& s = table.shells[table.worst[k]];
+    std::printf("%s %d %s (RMS %.4f mm, %.1fx the median)", k ? "," : "", s.shell,
+                shellConnectionText(s).c_str(), s.stats.rms_mm, s.rms_to_median);
   }
-  const Model nominal = loadModelFile(args.required("model"));
-  if (args.positional().empty()) throw UsageError("no samples file given");
-  std::vector<Sample> samples;
-  for (const std::string& path : args.positional()) {
-    auto more = loadSamplesFile(path);
-    samples.insert(samples.end(), more.begin(), more.end());
-  }
-  if (samples.empty()) throw UsageError("the samples files hold no samples");
-  const double k = args.number("outlier-sigmas", 5.0);
-  if (k <= 0) throw UsageError("--outlier-sigmas must be positive");
-  SolveOptions options;
-  options.max_iterations = static_cast<int>(args.integer("max-iterations", 100));
-  if (options.max_iterations < 1) throw UsageError("--max-iterations must be at least 1");
-
-  SolveResult fit = solveCalibration(nominal, samples, options);
-  std::vector<Outlier> outliers = findOutliers(fit.residuals, k);
-  std::vector<Sample> dropped;
-  if (args.flag("drop-outliers") && !outliers.empty()) {
-    std::vector<Sample> kept;
-    size_t next = 0;
-    for (size_t i = 0; i < samples.size(); ++i) {
-      if (next < outliers.size() && outliers[next].index == i) {
-        dropped.push_back(samples[i]);
-        ++next;
-      } else {
-        kept.push_back(samples[i]);
-      }
+  std::printf("\n");
+  for (const ShellResiduals& s : table.shells)
+    if (s.stands_out) {
+      std::printf("  ! an RMS at least %gx the median shell's: check those shells' set-up\n",
+                  kShellStandsOut);
+      break;
     }
-    samples.swap(kept);
-    fit = solveCalibration(nominal, samples, options);
-  }
-  const Model calibrated = withParams(nominal, fit.params);
-  const std::vector<double> ball_errors = predictedBallErrors(calibrated, fit.covariance, samples);
-  double ball_error_rms = 0, ball_error_max = 0;
-  for (double e : ball_errors) {
-    ball_error_rms += e * e;
-    ball_error_max = std::max(ball_error_max, e);
-  }
-  ball_error_rms = std::sqrt(ball_error_rms / ball_errors.size());
-  const double endpoint_factor = barToEndpointErrorFactor(calibrated, samples);
+}
 
-  std::vector<Sample> validation;
-  Eigen::VectorXd validation_residuals;
-  if (args.has("validate")) {
-    validation = loadSamplesFile(args.get("validate", ""));
-    if (validation.empty()) throw UsageError("the --validate file holds no samples");
-    validation_residuals = sampleResiduals(calibrated, validation);
-  }
-  TruthComparison truth_cmp;
-  if (args.has("truth")) {
-    const Model truth = loadModelFile(args.get("truth", ""));
-    truth_cmp =
-        compareWithTruth(nominal, calibrated, truth, validation.empty() ? samples : validation);
-  }
+void printParameters(const FitAssessment& a) {
+  std::printf(
+      "parameters: %zu estimated, %zu fixed at nominal (not identifiable from these data); "
+      "1-sigma from the covariance\n",
+      a.fit.free_params.size(), a.parameters.size() - a.fit.free_params.size());
+  std::printf("  %-10s %-4s %14s %14s %12s %10s\n", "name", "unit", "nominal", "calibrated",
+              "change", "1-sigma");
+  for (const ParameterRow& p : a.parameters)
+    std::printf("  %-10s %-4s %14s %14s %12s %10s\n", paramName(p.index).c_str(),
+                paramUnitLabel(p.index), formatParamValue(p.index, p.nominal).c_str(),
+                formatParamValue(p.index, p.calibrated).c_str(),
+                formatParamValue(p.index, p.change(), true).c_str(),
+                p.estimated ? formatParamValue(p.index, p.sigma).c_str() : "fixed");
+}
 
-  if (args.has("out")) saveModelFile(args.get("out", ""), calibrated);
-
-  FitReport report{nominal,
-                   calibrated,
-                   samples,
-                   fit,
-                   outliers,
-                   dropped,
-                   validation,
-                   validation_residuals,
-                   ball_error_rms,
-                   ball_error_max,
-                   endpoint_factor,
-                   truth_cmp,
-                   k};
-  const nlohmann::ordered_json summary = fitSummaryJson(report);
-  if (args.has("report")) writeReport(args.get("report", ""), report);
-
-  if (args.flag("json")) {
-    std::printf("%s\n", summary.dump().c_str());
-    return 0;
-  }
+void printText(const FitAssessment& a, const Model& calibrated, size_t files) {
+  const SolveResult& fit = a.fit;
   const auto& id = fit.identifiability;
-  std::printf("samples: %zu from %zu file(s)\n", samples.size(), args.positional().size());
-  std::printf("rank: %d of %d; %zu parameters not identified, fixed at their nominal values:\n  ",
-              id.rank, kParamCount, id.redundant.size());
+  std::printf("samples: %zu from %zu file(s), %zu connection(s): %s\n", a.samples.size(), files,
+              a.connections.size(), connectionList(a.connections).c_str());
+  std::printf(
+      "rank: %d of %d (expected %d); %zu parameters not identified, fixed at their nominal "
+      "values:\n  ",
+      id.rank, kParamCount, id.expected, id.redundant.size());
   for (int i : id.redundant) std::printf("%s ", paramName(i).c_str());
   std::printf("\niterations: %d, stopped: %s\n", fit.iterations, stopReasonText(fit.stop));
   std::printf(
@@ -133,35 +107,98 @@ int run(const std::vector<std::string>& argv) {
               fit.condition_number, fit.o1, fit.o3);
   std::printf(
       "predicted 1-sigma ball-position error over the data's poses: RMS %.4f mm, max %.4f mm\n",
-      ball_error_rms, ball_error_max);
+      a.predicted_ball_error_rms_mm, a.predicted_ball_error_max_mm);
   std::printf("bar-to-endpoint error factor: %.2f (the paper estimates about 4)\n",
-              endpoint_factor);
-  if (outliers.empty()) {
-    std::printf("outliers beyond %.1f robust sigmas: none\n", k);
+              a.bar_to_endpoint_factor);
+  if (a.outliers.empty()) {
+    std::printf("outliers beyond %.1f robust sigmas: none\n", a.outlier_sigmas);
   } else {
-    std::printf("outliers beyond %.1f robust sigmas: %zu%s\n", k, outliers.size(),
-                dropped.empty() ? " (kept; --drop-outliers drops them and refits)"
-                                : " (dropped, refitted)");
-    const auto& list = dropped.empty() ? samples : dropped;
-    for (size_t i = 0; i < outliers.size(); ++i) {
-      const Sample& s = dropped.empty() ? list[outliers[i].index] : list[i];
-      std::printf("  %s: residual %+.4f mm (%.1f robust sigmas)\n", where(s).c_str(),
-                  outliers[i].residual_mm, outliers[i].robust_sigmas);
-    }
+    std::printf("outliers beyond %.1f robust sigmas: %zu%s\n", a.outlier_sigmas, a.outliers.size(),
+                a.outliers_dropped ? " (dropped, refitted)"
+                                   : " (kept; --drop-outliers drops them and refits)");
+    for (const FlaggedOutlier& o : a.outliers)
+      std::printf("  %s: residual %+.4f mm (%.1f robust sigmas)\n", where(o.sample).c_str(),
+                  o.residual_mm, o.robust_sigmas);
   }
-  if (!validation.empty()) {
-    const ResidualStats v = residualStats(validation_residuals);
-    std::printf("validation (%s, %zu samples): RMS %.4f mm, max |residual| %.4f mm\n",
-                args.get("validate", "").c_str(), v.count, v.rms_mm, v.max_abs_mm);
+  std::printf("\nresidual per shell after the fit:\n");
+  printShells(a.shells);
+  if (a.validation) {
+    const ValidationResult& v = *a.validation;
+    std::printf("\nvalidation, %s: %zu samples, RMS %.4f mm, max |residual| %.4f mm\n",
+                v.description.c_str(), v.stats.count, v.stats.rms_mm, v.stats.max_abs_mm);
+    printShells(v.shells);
   }
-  if (truth_cmp.poses > 0)
+  if (a.truth)
     std::printf(
-        "ball-position error against the truth over %zu poses: nominal RMS %.4f mm, "
+        "\nball-position error against the truth over %zu poses: nominal RMS %.4f mm, "
         "calibrated RMS %.4f mm (max %.4f mm)\n",
-        truth_cmp.poses, truth_cmp.nominal_rms_mm, truth_cmp.calibrated_rms_mm,
-        truth_cmp.calibrated_max_mm);
-  if (args.has("out")) std::printf("wrote %s\n", args.get("out", "").c_str());
-  if (args.has("report")) std::printf("report in %s\n", args.get("report", "").c_str());
+        a.truth->poses, a.truth->nominal_rms_mm, a.truth->calibrated_rms_mm,
+        a.truth->calibrated_max_mm);
+  std::printf("\n");
+  printParameters(a);
+  std::printf("\ncalibrated model: %s\n", calibrated.name.c_str());
+}
+
+int run(const std::vector<std::string>& argv) {
+  const Args args(
+      argv, {"model", "out", "validate", "report", "outlier-sigmas", "truth", "max-iterations"},
+      {"json", "drop-outliers", "allow-partial", "help"});
+  if (args.flag("help")) {
+    std::fputs(kHelp, stdout);
+    return 0;
+  }
+  const Model nominal = loadModelFile(args.required("model"));
+  if (args.positional().empty()) throw UsageError("no samples file given");
+  std::vector<Sample> samples;
+  FitOrigin origin;
+  for (const std::string& path : args.positional()) {
+    auto more = loadSamplesFile(path);
+    samples.insert(samples.end(), more.begin(), more.end());
+    origin.samples_files.push_back(std::filesystem::absolute(path).lexically_normal().string());
+  }
+  if (samples.empty()) throw UsageError("the samples files hold no samples");
+  AssessOptions options;
+  options.outlier_sigmas = args.number("outlier-sigmas", options.outlier_sigmas);
+  if (options.outlier_sigmas <= 0) throw UsageError("--outlier-sigmas must be positive");
+  options.drop_outliers = args.flag("drop-outliers");
+  options.solve.max_iterations =
+      static_cast<int>(args.integer("max-iterations", options.solve.max_iterations));
+  if (options.solve.max_iterations < 1) throw UsageError("--max-iterations must be at least 1");
+  if (args.has("validate")) {
+    const std::string path = args.get("validate", "");
+    HeldOutSamples held{loadSamplesFile(path), std::nullopt,
+                        "held-out samples " + path + " predicted by this fit"};
+    if (held.samples.empty()) throw UsageError("the --validate file holds no samples");
+    options.validation = std::move(held);
+  }
+  if (args.has("truth")) options.truth = loadModelFile(args.get("truth", ""));
+
+  const FitAssessment fit = assessFit(nominal, std::move(samples), options);
+  const Model calibrated = calibratedModel(fit, origin);
+  const bool refuse = !fit.problems.empty() && !args.flag("allow-partial");
+  if (args.has("out") && !refuse) saveModelFile(args.get("out", ""), calibrated);
+  if (args.has("report")) writeReport(args.get("report", ""), fit, calibrated);
+
+  if (args.flag("json")) {
+    std::printf("%s\n", fitSummaryJson(fit).dump().c_str());
+  } else {
+    printText(fit, calibrated, args.positional().size());
+    if (args.has("out") && !refuse) std::printf("wrote %s\n", args.get("out", "").c_str());
+    if (args.has("report"))
+      std::printf("report in %s (summary.html)\n", args.get("report", "").c_str());
+  }
+  std::fflush(stdout);
+  if (fit.problems.empty()) return 0;
+  std::fprintf(stderr, "robocal solve: %s: the fit is not usable as a calibration:\n",
+               refuse ? "refused" : "warning");
+  for (const std::string& p : fit.problems) std::fprintf(stderr, "  - %s\n", p.c_str());
+  if (refuse) {
+    std::fprintf(stderr, "%s (--allow-partial writes it anyway, with these warnings)\n",
+                 args.has("out") ? "no model written" : "no model would be written");
+    return kExitNotUsable;
+  }
+  if (args.has("out"))
+    std::fprintf(stderr, "written anyway (--allow-partial); its provenance lists these warnings\n");
   return 0;
 }
 

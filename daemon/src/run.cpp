@@ -472,81 +472,81 @@ struct RunController::Impl {
   void launchFit(RunDir dir, std::vector<Sample> all, double set_extension_mm, int set_index) {
     if (solver.valid()) solver.wait();
     std::optional<Model> previous;
+    int previous_set = 0;
     {
       std::lock_guard lock(mutex);
       if (last_result.contains("calibrated_file") && last_result.value("run", "") == dir.id()) {
         try {
           previous = loadModelFile(last_result["calibrated_file"].get<std::string>());
+          previous_set = last_result.value("set", 0);
         } catch (const std::exception& e) {  // the fit goes on, without the prediction
           spdlog::warn("the previous set's model cannot be read: {}", e.what());
         }
       }
     }
-    solver = std::async(std::launch::async, [this, dir, all = std::move(all), set_extension_mm,
-                                             set_index, previous]() mutable {
-      try {
-        std::vector<Sample> set;
-        for (const Sample& s : all)
-          if (std::abs(s.extension_mm - set_extension_mm) < 1e-6) set.push_back(s);
-        json prediction;
-        if (previous) {
-          const ResidualStats v = residualStats(sampleResiduals(*previous, set));
-          prediction = {{"n", v.count}, {"rms_mm", v.rms_mm}, {"max_abs_mm", v.max_abs_mm}};
-        }
-        const SolveResult fit = solveCalibration(nominal, all);
-        const Model calibrated = withParams(nominal, fit.params);
-        const std::string name = "set" + std::to_string(set_index);
-        const std::string model_file = dir.file("calibrated-" + name + ".json");
-        saveModelFile(model_file, calibrated);
-        const std::vector<Outlier> outliers = findOutliers(fit.residuals, 5.0);
-        const std::vector<Sample> none;
-        const Eigen::VectorXd no_residuals;
-        const auto errors = predictedBallErrors(calibrated, fit.covariance, all);
-        double rms = 0, worst = 0;
-        for (double e : errors) {
-          rms += e * e;
-          worst = std::max(worst, e);
-        }
-        rms = std::sqrt(rms / std::max<size_t>(1, errors.size()));
-        FitReport report{nominal,
-                         calibrated,
-                         all,
-                         fit,
-                         outliers,
-                         none,
-                         none,
-                         no_residuals,
-                         rms,
-                         worst,
-                         barToEndpointErrorFactor(calibrated, all),
-                         {},
-                         5.0};
-        writeReport(dir.file("report-" + name), report);
-        json result = fitSummaryJson(report);
-        result["class"] = "RESULT";
-        result["run"] = dir.id();
-        result["set"] = set_index;
-        result["extension_mm"] = set_extension_mm;
-        result["calibrated_file"] = model_file;
-        result["report_dir"] = dir.file("report-" + name);
-        result["samples_file"] = dir.file("samples.csv");
-        if (!prediction.is_null()) {
-          result["prediction"] = prediction;
-          result["validation_rms_mm"] = prediction["rms_mm"];
-        }
-        dir.writeJson("result-" + name + ".json", result);
-        dir.logEvent({{"event", "result"}, {"set", set_index}, {"rms_mm", fit.after.rms_mm}});
-        {
-          std::lock_guard lock(mutex);
-          last_result = result;
-        }
-        publish(result, false);
-      } catch (const std::exception& e) {
-        spdlog::error("solver failed: {}", e.what());
-        publish({{"class", "ERROR"}, {"message", std::string("solver failed: ") + e.what()}},
-                false);
-      }
-    });
+    // The samples file, read as robocal solve reads it (here, while nothing appends to it): the
+    // RESULT is then `robocal solve --json` of that file plus the run's keys, by construction, and
+    // outliers are named by line.
+    std::vector<Sample> fitted;
+    try {
+      fitted = loadSamplesFile(dir.file("samples.csv"));
+    } catch (const std::exception& e) {
+      spdlog::warn("the samples file cannot be read back for the fit: {}", e.what());
+    }
+    if (fitted.size() != all.size()) {
+      spdlog::warn("the samples file holds {} samples, the run {}: fitting the run's",
+                   fitted.size(), all.size());
+      fitted = std::move(all);
+    }
+    solver =
+        std::async(std::launch::async, [this, dir, fitted = std::move(fitted), set_extension_mm,
+                                        set_index, previous, previous_set]() mutable {
+          try {
+            AssessOptions options;  // robocal solve's defaults
+            if (previous) {
+              HeldOutSamples held{{},
+                                  previous,
+                                  "set " + std::to_string(set_index) + " predicted by the set-" +
+                                      std::to_string(previous_set) + " fit"};
+              for (const Sample& s : fitted)
+                if (std::abs(s.extension_mm - set_extension_mm) < 1e-6) held.samples.push_back(s);
+              if (!held.samples.empty()) options.validation = std::move(held);
+            }
+            const FitAssessment fit = assessFit(nominal, std::move(fitted), options);
+            const std::string name = "set" + std::to_string(set_index);
+            const std::string model_file = dir.file("calibrated-" + name + ".json");
+            const Model calibrated = calibratedModel(fit, {dir.id(), {dir.file("samples.csv")}});
+            saveModelFile(model_file, calibrated);
+            writeReport(dir.file("report-" + name), fit, calibrated);
+            json result = fitSummaryJson(fit);
+            result["run"] = dir.id();
+            result["set"] = set_index;
+            result["extension_mm"] = set_extension_mm;
+            result["calibrated_file"] = model_file;
+            result["report_dir"] = dir.file("report-" + name);
+            result["samples_file"] = dir.file("samples.csv");
+            if (fit.validation)  // kept for clients of protocol 1.0; validation_* say the same
+              result["prediction"] = {{"n", fit.validation->stats.count},
+                                      {"rms_mm", fit.validation->stats.rms_mm},
+                                      {"max_abs_mm", fit.validation->stats.max_abs_mm}};
+            dir.writeJson("result-" + name + ".json", result);
+            dir.logEvent({{"event", "result"},
+                          {"set", set_index},
+                          {"rms_mm", fit.fit.after.rms_mm},
+                          {"problems", fit.problems}});
+            for (const std::string& problem : fit.problems)
+              spdlog::warn("set {} fit not usable as a calibration: {}", set_index, problem);
+            {
+              std::lock_guard lock(mutex);
+              last_result = result;
+            }
+            publish(result, false);
+          } catch (const std::exception& e) {
+            spdlog::error("solver failed: {}", e.what());
+            publish({{"class", "ERROR"}, {"message", std::string("solver failed: ") + e.what()}},
+                    false);
+          }
+        });
   }
 
   struct Measurement {

@@ -1,42 +1,84 @@
 #include <robocal/formats/report.hpp>
 
+#include <robocal/build_info.hpp>
 #include <robocal/formats/error.hpp>
+
+#include "report_parts.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <filesystem>
 #include <map>
 #include <numbers>
 
 namespace robocal {
-namespace {
+namespace report_detail {
 
-using ojson = nlohmann::ordered_json;
+std::string escapeXml(const std::string& text) {
+  std::string out;
+  out.reserve(text.size());
+  for (char c : text) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&#39;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
 
-std::string fmt(const char* format, double a, double b = 0, double c = 0, double d = 0) {
+std::string fmt(const char* format, double a, double b, double c, double d) {
   char buf[256];
   std::snprintf(buf, sizeof buf, format, a, b, c, d);
   return buf;
 }
 
-// A minimal SVG chart: a plot area with axes, ticks and labels, in data coordinates.
+}  // namespace report_detail
+
+namespace {
+
+using ojson = nlohmann::ordered_json;
+using report_detail::escapeXml;
+using report_detail::Figure;
+using report_detail::fmt;
+
+// A minimal SVG chart: a plot area with axes, ticks and labels, in data coordinates. Without
+// numeric x ticks, the caller labels the x axis (xLabel).
 class SvgChart {
  public:
-  SvgChart(std::string title, std::string x_label, std::string y_label, double x0, double x1,
-           double y0, double y1)
+  SvgChart(const std::string& title, const std::string& x_label, const std::string& y_label,
+           double x0, double x1, double y0, double y1, bool x_ticks = true)
       : x0_(x0), x1_(x1), y0_(y0), y1_(y1) {
-    body_ += "<text x='400' y='24' text-anchor='middle' font-size='16'>" + title + "</text>\n";
-    body_ += "<text x='400' y='490' text-anchor='middle' font-size='13'>" + x_label + "</text>\n";
+    body_ += "<text x='375' y='24' text-anchor='middle' font-size='15'>" + escapeXml(title) +
+             "</text>\n";
+    body_ += "<text x='375' y='492' text-anchor='middle' font-size='13'>" + escapeXml(x_label) +
+             "</text>\n";
     body_ +=
         "<text x='18' y='250' text-anchor='middle' font-size='13' transform='rotate(-90 18 250)'>" +
-        y_label + "</text>\n";
+        escapeXml(y_label) + "</text>\n";
     body_ += fmt("<rect x='%g' y='%g' width='%g' height='%g' fill='none' stroke='black'/>\n", kLeft,
                  kTop, kRight - kLeft, kBottom - kTop);
     for (int i = 0; i <= 6; ++i) {
       const double xv = x0 + (x1 - x0) * i / 6, yv = y0 + (y1 - y0) * i / 6;
-      body_ += fmt("<text x='%g' y='%g' text-anchor='middle' font-size='11'>%.4g</text>\n", px(xv),
-                   kBottom + 16, xv);
+      if (x_ticks)
+        body_ += fmt("<text x='%g' y='%g' text-anchor='middle' font-size='11'>%.4g</text>\n",
+                     px(xv), kBottom + 16, xv);
       body_ += fmt("<text x='%g' y='%g' text-anchor='end' font-size='11'>%.3g</text>\n", kLeft - 4,
                    py(yv) + 4, yv);
     }
@@ -46,31 +88,47 @@ class SvgChart {
   }
   double px(double x) const { return kLeft + (x - x0_) / (x1_ - x0_) * (kRight - kLeft); }
   double py(double y) const { return kBottom - (y - y0_) / (y1_ - y0_) * (kBottom - kTop); }
-  void dot(double x, double y, const std::string& colour) {
-    body_ += fmt("<circle cx='%.1f' cy='%.1f' r='2.2' fill='", px(x), py(y)) + colour + "'/>\n";
+  void dot(double x, double y, const std::string& colour, double radius = 2.2) {
+    body_ +=
+        fmt("<circle cx='%.1f' cy='%.1f' r='%g' fill='", px(x), py(y), radius) + colour + "'/>\n";
   }
-  void bar(double xa, double xb, double h) {
-    body_ += fmt(
-        "<rect x='%.1f' y='%.1f' width='%.1f' height='%.1f' fill='#9ecae1' stroke='#3182bd'/>\n",
-        px(xa), py(h), px(xb) - px(xa), py(0) - py(h));
+  void bar(double xa, double xb, double h, const std::string& fill = "#9ecae1",
+           const std::string& stroke = "#3182bd") {
+    body_ += fmt("<rect x='%.1f' y='%.1f' width='%.1f' height='%.1f' ", px(xa), py(h),
+                 px(xb) - px(xa), py(0) - py(h)) +
+             "fill='" + fill + "' stroke='" + stroke + "'/>\n";
   }
   void polyline(const std::vector<std::pair<double, double>>& points, const std::string& colour) {
     body_ += "<polyline fill='none' stroke-width='2' stroke='" + colour + "' points='";
     for (const auto& [x, y] : points) body_ += fmt("%.1f,%.1f ", px(x), py(y));
     body_ += "'/>\n";
   }
+  // A horizontal line across the plot at y, dashed, with a label at its right end.
+  void level(double y, const std::string& colour, const std::string& label) {
+    body_ += fmt("<line x1='%g' y1='%.1f' x2='%g' y2='%.1f' stroke-dasharray='6 4' ", kLeft, py(y),
+                 kRight, py(y)) +
+             "stroke='" + colour + "'/>\n";
+    body_ += fmt("<text x='%g' y='%.1f' font-size='11' fill='", kRight + 6, py(y) + 4) + colour +
+             "'>" + escapeXml(label) + "</text>\n";
+  }
+  void xLabel(double x, int line, const std::string& text) {
+    body_ += fmt("<text x='%.1f' y='%g' text-anchor='middle' font-size='10'>", px(x),
+                 kBottom + 14 + 12 * line) +
+             escapeXml(text) + "</text>\n";
+  }
   void legend(int row, const std::string& text, const std::string& colour) {
     const double y = kTop + 14 + 15 * row;
     body_ += fmt("<circle cx='%g' cy='%g' r='4' fill='", kRight + 12, y - 4) + colour + "'/>\n";
-    body_ += fmt("<text x='%g' y='%g' font-size='11'>", kRight + 20, y) + text + "</text>\n";
+    body_ +=
+        fmt("<text x='%g' y='%g' font-size='11'>", kRight + 20, y) + escapeXml(text) + "</text>\n";
   }
   void note(int row, const std::string& text) {
-    body_ += fmt("<text x='%g' y='%g' font-size='12'>", kLeft + 8, kTop + 18 + 16 * row) + text +
-             "</text>\n";
+    body_ += fmt("<text x='%g' y='%g' font-size='12'>", kLeft + 8, kTop + 18 + 16 * row) +
+             escapeXml(text) + "</text>\n";
   }
   std::string svg() const {
     return "<svg xmlns='http://www.w3.org/2000/svg' width='900' height='500' "
-           "font-family='sans-serif'>\n"
+           "viewBox='0 0 900 500' font-family='sans-serif'>\n"
            "<rect width='900' height='500' fill='white'/>\n" +
            body_ + "</svg>\n";
   }
@@ -89,6 +147,11 @@ double symmetricLimit(const Eigen::VectorXd& r) {
   return m > 0 ? m * 1.1 : 1.0;
 }
 
+std::string sampleConnectionText(const Sample& s) {
+  return connectionName({s.ball_index, s.chuck_index}) +
+         (s.extension_mm > 0 ? fmt(" +%.0f mm", s.extension_mm) : "");
+}
+
 // Figure 3: residual against longitude, one series per shell.
 ojson longitudeFigure(const std::vector<Sample>& samples, const Eigen::VectorXd& r,
                       const std::string& title, std::string* svg) {
@@ -102,8 +165,7 @@ ojson longitudeFigure(const std::vector<Sample>& samples, const Eigen::VectorXd&
     if (shell.is_null()) shell = {{"lon_deg", ojson::array()}, {"residual_mm", ojson::array()}};
     shell["lon_deg"].push_back(s.lon_deg);
     shell["residual_mm"].push_back(r[static_cast<Eigen::Index>(i)]);
-    names[s.shell] = connectionName({s.ball_index, s.chuck_index}) +
-                     (s.extension_mm > 0 ? fmt(" +%.0f mm", s.extension_mm) : "");
+    names[s.shell] = sampleConnectionText(s);
   }
   ojson out = {{"x", "lon_deg"}, {"y", "residual_mm"}, {"series", ojson::array()}};
   int row = 0;
@@ -155,6 +217,42 @@ ojson histogramFigure(const Eigen::VectorXd& r, const std::string& title, std::s
   return {{"mean_mm", mean}, {"sigma_mm", sigma}, {"n", r.size()}, {"bins", bin_json}};
 }
 
+// Residual RMS per shell as bars (stand-outs in red) with each shell's max |residual| as a dot,
+// and the median shell's RMS and the stand-out level as dashed lines.
+ojson shellFigure(const ShellTable& table, const std::string& title, std::string* svg) {
+  const auto& shells = table.shells;
+  double top = 0, median_rms = 0;
+  for (const ShellResiduals& s : shells) {
+    top = std::max(top, s.stats.max_abs_mm);
+    if (s.rms_to_median > 0) median_rms = s.stats.rms_mm / s.rms_to_median;
+  }
+  top = std::max({top, kShellStandsOut * median_rms, 1e-6}) * 1.1;
+  const double count = static_cast<double>(std::max<size_t>(shells.size(), 1));
+  SvgChart chart(title, "", "residual (mm)", -0.5, count - 0.5, 0, top, false);
+  ojson out = ojson::array();
+  for (size_t k = 0; k < shells.size(); ++k) {
+    const ShellResiduals& s = shells[k];
+    const double x = static_cast<double>(k);
+    chart.bar(x - 0.35, x + 0.35, s.stats.rms_mm, s.stands_out ? "#fc9272" : "#9ecae1",
+              s.stands_out ? "#de2d26" : "#3182bd");
+    chart.dot(x, s.stats.max_abs_mm, "#252525", 3);
+    chart.xLabel(x, 0, std::to_string(s.shell));
+    chart.xLabel(x, 1, connectionName(s.connection));
+    if (s.extension_mm > 0) chart.xLabel(x, 2, fmt("+%.0f", s.extension_mm));
+    out.push_back(
+        {{"shell", s.shell}, {"rms_mm", s.stats.rms_mm}, {"max_abs_mm", s.stats.max_abs_mm}});
+  }
+  if (median_rms > 0) {
+    chart.level(median_rms, "#636363", "median RMS");
+    chart.level(kShellStandsOut * median_rms, "#de2d26", fmt("%gx median", kShellStandsOut));
+  }
+  chart.legend(4, "bar: RMS", "#3182bd");
+  chart.legend(5, "dot: max |residual|", "#252525");
+  chart.legend(6, "red: stands out", "#de2d26");
+  *svg = chart.svg();
+  return {{"x", "shell"}, {"shells", out}};
+}
+
 ojson names(const std::vector<int>& indices) {
   ojson out = ojson::array();
   for (int i : indices) out.push_back(paramName(i));
@@ -165,14 +263,107 @@ ojson sampleRef(const Sample& s) {
   return {{"file", s.source}, {"line", s.source_line}, {"shell", s.shell}};
 }
 
+ojson shellsJson(const ShellTable& table) {
+  ojson out = ojson::array();
+  for (const ShellResiduals& s : table.shells)
+    out.push_back({{"shell", s.shell},
+                   {"connection", connectionName(s.connection)},
+                   {"extension_mm", s.extension_mm},
+                   {"n", s.stats.count},
+                   {"rms_mm", s.stats.rms_mm},
+                   {"max_abs_mm", s.stats.max_abs_mm},
+                   {"mean_mm", s.stats.mean_mm},
+                   {"rms_to_median", s.rms_to_median},
+                   {"stands_out", s.stands_out}});
+  return out;
+}
+
+ojson worstJson(const ShellTable& table) {
+  ojson out = ojson::array();
+  for (int k : table.worst) out.push_back(table.shells[k].shell);
+  return out;
+}
+
+ojson parameterTableJson(const std::vector<ParameterRow>& rows) {
+  ojson out = ojson::array();
+  for (const ParameterRow& p : rows) {
+    const std::string unit = paramUnitLabel(p.index);
+    ojson row = {{"name", paramName(p.index)}, {"unit", unit}, {"estimated", p.estimated}};
+    row["nominal_" + unit] = p.nominal;
+    row["calibrated_" + unit] = p.calibrated;
+    row["change_" + unit] = p.change();
+    row["sigma_" + unit] = p.estimated ? ojson(p.sigma) : ojson(nullptr);
+    out.push_back(row);
+  }
+  return out;
+}
+
+std::string dateUtc(std::chrono::system_clock::time_point t, const char* format) {
+  const std::time_t seconds = std::chrono::system_clock::to_time_t(t);
+  std::tm tm{};
+  gmtime_r(&seconds, &tm);
+  char buf[64];
+  std::strftime(buf, sizeof buf, format, &tm);
+  return buf;
+}
+
 }  // namespace
 
-nlohmann::ordered_json fitSummaryJson(const FitReport& r) {
-  const SolveResult& fit = r.fit;
+const char* paramUnitLabel(int index) {
+  return paramKind(index) == ParamKind::kGain ? "gain" : paramUnit(index);
+}
+
+std::string formatParamValue(int index, double value, bool sign) {
+  const ParamKind kind = paramKind(index);
+  const char* format = kind == ParamKind::kTranslation ? (sign ? "%+.4f" : "%.4f")
+                       : kind == ParamKind::kAngle     ? (sign ? "%+.5f" : "%.5f")
+                                                       : (sign ? "%+.6f" : "%.6f");
+  return fmt(format, value);
+}
+
+std::string shellConnectionText(const ShellResiduals& shell) {
+  return connectionName(shell.connection) +
+         (shell.extension_mm > 0 ? fmt(" +%.0f mm", shell.extension_mm) : "");
+}
+
+const char* robocalVersion() {
+  return build::kVersion;
+}
+
+Model calibratedModel(const FitAssessment& fit, const FitOrigin& origin,
+                      std::chrono::system_clock::time_point made) {
+  Model m = fit.calibrated;
+  const std::string day = dateUtc(made, "%Y-%m-%d");
+  m.name =
+      (fit.nominal.name.empty() ? std::string("model") : fit.nominal.name) + " calibrated " + day;
+  ModelProvenance p;
+  p.run_id = origin.run_id;
+  p.date_utc = dateUtc(made, "%Y-%m-%dT%H:%M:%SZ");
+  p.nominal_name = fit.nominal.name;
+  p.samples_files = origin.samples_files;
+  p.samples = fit.samples.size();
+  p.rms_mm = fit.fit.after.rms_mm;
+  p.rank = fit.fit.identifiability.rank;
+  p.expected_rank = fit.fit.identifiability.expected;
+  p.robocal_version = robocalVersion();
+  p.warnings = fit.problems;
+  m.provenance = std::move(p);
+  return m;
+}
+
+nlohmann::ordered_json fitSummaryJson(const FitAssessment& a) {
+  const SolveResult& fit = a.fit;
+  ojson problems = ojson::array();
+  for (const std::string& p : a.problems) problems.push_back(p);
+  ojson connections = ojson::array();
+  for (const Connection& c : a.connections) connections.push_back(connectionName(c));
   ojson out = {{"class", "RESULT"},
                {"n", fit.after.count},
                {"rank", fit.identifiability.rank},
+               {"expected_rank", fit.identifiability.expected},
                {"parameters", kParamCount},
+               {"problems", problems},
+               {"connections", connections},
                {"redundant", names(fit.identifiability.redundant)},
                {"redundant_policy", "fixed at nominal"},
                {"iterations", fit.iterations},
@@ -185,55 +376,72 @@ nlohmann::ordered_json fitSummaryJson(const FitReport& r) {
                {"condition_number", fit.condition_number},
                {"o1", fit.o1},
                {"o3", fit.o3},
-               {"predicted_ball_error_rms_mm", r.ball_error_rms_mm},
-               {"predicted_ball_error_max_mm", r.ball_error_max_mm},
-               {"bar_to_endpoint_factor", r.bar_to_endpoint_factor},
-               {"outlier_sigmas", r.outlier_sigmas}};
+               {"predicted_ball_error_rms_mm", a.predicted_ball_error_rms_mm},
+               {"predicted_ball_error_max_mm", a.predicted_ball_error_max_mm},
+               {"bar_to_endpoint_factor", a.bar_to_endpoint_factor},
+               {"outlier_sigmas", a.outlier_sigmas}};
   ojson outliers = ojson::array();
-  for (size_t i = 0; i < r.outliers.size(); ++i) {
-    const Sample& s = r.dropped.empty() ? r.samples[r.outliers[i].index] : r.dropped[i];
-    ojson o = sampleRef(s);
-    o["residual_mm"] = r.outliers[i].residual_mm;
-    o["robust_sigmas"] = r.outliers[i].robust_sigmas;
-    outliers.push_back(o);
+  for (const FlaggedOutlier& o : a.outliers) {
+    ojson j = sampleRef(o.sample);
+    j["residual_mm"] = o.residual_mm;
+    j["robust_sigmas"] = o.robust_sigmas;
+    outliers.push_back(j);
   }
   out["outliers"] = outliers;
-  out["dropped"] = r.dropped.size();
-  if (!r.validation.empty()) {
-    const ResidualStats v = residualStats(r.validation_residuals);
-    out["validation_n"] = v.count;
-    out["validation_rms_mm"] = v.rms_mm;
-    out["validation_max_abs_mm"] = v.max_abs_mm;
+  out["dropped"] = a.outliers_dropped ? a.outliers.size() : 0;
+  out["worst_shells"] = worstJson(a.shells);
+  out["shells"] = shellsJson(a.shells);
+  out["parameter_table"] = parameterTableJson(a.parameters);
+  if (a.validation) {
+    const ValidationResult& v = *a.validation;
+    out["validation_description"] = v.description;
+    out["validation_n"] = v.stats.count;
+    out["validation_rms_mm"] = v.stats.rms_mm;
+    out["validation_max_abs_mm"] = v.stats.max_abs_mm;
+    out["validation_worst_shells"] = worstJson(v.shells);
+    out["validation_shells"] = shellsJson(v.shells);
   }
-  if (r.truth.poses > 0) {
-    out["truth_poses"] = r.truth.poses;
-    out["truth_nominal_rms_mm"] = r.truth.nominal_rms_mm;
-    out["truth_calibrated_rms_mm"] = r.truth.calibrated_rms_mm;
-    out["truth_calibrated_max_mm"] = r.truth.calibrated_max_mm;
+  if (a.truth) {
+    out["truth_poses"] = a.truth->poses;
+    out["truth_nominal_rms_mm"] = a.truth->nominal_rms_mm;
+    out["truth_calibrated_rms_mm"] = a.truth->calibrated_rms_mm;
+    out["truth_calibrated_max_mm"] = a.truth->calibrated_max_mm;
   }
   return out;
 }
 
-void writeReport(const std::string& dir, const FitReport& r) {
+void writeReport(const std::string& dir, const FitAssessment& a, const Model& calibrated) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) throw FormatError(dir + ": cannot create the report folder: " + ec.message());
-  ojson report = {{"summary", fitSummaryJson(r)}, {"figures", ojson::object()}};
-  std::string svg;
-  report["figures"]["residuals_vs_longitude"] = longitudeFigure(
-      r.samples, r.fit.residuals, "Residual against longitude (fitted samples)", &svg);
-  writeTextFileAtomic(dir + "/residuals_vs_longitude.svg", svg);
-  report["figures"]["residual_histogram"] =
-      histogramFigure(r.fit.residuals, "Residual distribution (fitted samples)", &svg);
-  writeTextFileAtomic(dir + "/residual_histogram.svg", svg);
-  if (!r.validation.empty()) {
-    report["figures"]["validation_vs_longitude"] = longitudeFigure(
-        r.validation, r.validation_residuals, "Validation residual against longitude", &svg);
-    writeTextFileAtomic(dir + "/validation_vs_longitude.svg", svg);
-    report["figures"]["validation_histogram"] =
-        histogramFigure(r.validation_residuals, "Validation residual distribution", &svg);
-    writeTextFileAtomic(dir + "/validation_histogram.svg", svg);
+  const ojson summary = fitSummaryJson(a);
+  ojson report = {{"summary", summary}, {"figures", ojson::object()}};
+  std::vector<Figure> figures;
+  auto add = [&](const std::string& key, const std::string& caption, auto&& make) {
+    Figure f{key + ".svg", caption, {}};
+    report["figures"][key] = make(caption, &f.svg);
+    writeTextFileAtomic(dir + "/" + f.file, f.svg);
+    figures.push_back(std::move(f));
+  };
+  const auto& r = a.fit.residuals;
+  add("residuals_vs_longitude", "Residual against longitude, fitted samples",
+      [&](const std::string& t, std::string* s) { return longitudeFigure(a.samples, r, t, s); });
+  add("residual_histogram", "Residual distribution, fitted samples",
+      [&](const std::string& t, std::string* s) { return histogramFigure(r, t, s); });
+  add("shell_rms", "Residual per shell, fitted samples",
+      [&](const std::string& t, std::string* s) { return shellFigure(a.shells, t, s); });
+  if (a.validation) {
+    const ValidationResult& v = *a.validation;
+    add("validation_vs_longitude", "Residual against longitude, " + v.description,
+        [&](const std::string& t, std::string* s) {
+          return longitudeFigure(v.samples, v.residuals, t, s);
+        });
+    add("validation_histogram", "Residual distribution, " + v.description,
+        [&](const std::string& t, std::string* s) { return histogramFigure(v.residuals, t, s); });
+    add("validation_shell_rms", "Residual per shell, " + v.description,
+        [&](const std::string& t, std::string* s) { return shellFigure(v.shells, t, s); });
   }
+  writeTextFileAtomic(dir + "/summary.html", report_detail::summaryHtml(a, calibrated, figures));
   writeTextFileAtomic(dir + "/report.json", report.dump(1) + "\n");
 }
 

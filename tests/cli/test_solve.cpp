@@ -5,8 +5,11 @@
 #include <robocal/formats/model_json.hpp>
 #include <robocal/formats/samples_csv.hpp>
 
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <random>
+#include <sstream>
 
 using namespace robocal;
 using namespace robocal::test;
@@ -55,8 +58,9 @@ TEST_CASE("robocal solve --report writes the figures and report.json") {
   INFO(r.output);
   REQUIRE(r.exit_code == 0);
   CHECK_THAT(r.output, Contains("rank: 36 of 54"));
-  for (const char* f : {"residuals_vs_longitude.svg", "residual_histogram.svg",
-                        "validation_vs_longitude.svg", "validation_histogram.svg"}) {
+  for (const char* f :
+       {"residuals_vs_longitude.svg", "residual_histogram.svg", "shell_rms.svg",
+        "validation_vs_longitude.svg", "validation_histogram.svg", "validation_shell_rms.svg"}) {
     const std::string svg = readTextFile(dir / ("rep/" + std::string(f)));
     CHECK_THAT(svg, Contains("<svg") && Contains("</svg>"));
   }
@@ -69,6 +73,19 @@ TEST_CASE("robocal solve --report writes the figures and report.json") {
   for (const auto& b : fig["residual_histogram"]["bins"]) binned += b["count"].get<int>();
   CHECK(binned == report["summary"]["n"].get<int>());
   CHECK(fig.contains("validation_histogram"));
+  CHECK(fig["shell_rms"]["shells"].size() == 9);
+  // One page with the numbers, the tables and the figures, nothing fetched from elsewhere.
+  const std::string html = readTextFile(dir / "rep/summary.html");
+  CHECK_THAT(html, Contains("<!DOCTYPE html>") && Contains("Usable as a calibration") &&
+                       Contains("<td class='l'>L0.x</td>") && Contains("B3C3 +150 mm") &&
+                       Contains("href='shell_rms.svg'") && Contains("<svg"));
+  auto count = [&](const std::string& what) {
+    size_t n = 0;
+    for (size_t at = html.find(what); at != std::string::npos; at = html.find(what, at + 1)) ++n;
+    return n;
+  };
+  CHECK(count("http") == count("xmlns='http://www.w3.org/2000/svg'"));  // no external assets
+  CHECK(html.find("src=") == std::string::npos);
 }
 
 TEST_CASE("robocal solve names an outlier by file and line, and drops it only when asked") {
@@ -119,9 +136,157 @@ TEST_CASE("robocal solve on one shell reports the rank and solves what is identi
       runRobocal("simulate --model " + kModel + " --connections B2C2 --out " + (dir / "one.csv"))
           .exit_code == 0);
   const auto r = runRobocal("solve --model " + kModel + " " + (dir / "one.csv") + " --json");
-  REQUIRE(r.exit_code == 0);
-  const auto j = nlohmann::json::parse(r.output);
+  CHECK(r.exit_code == 3);  // not usable as a calibration, but fitted and reported
+  const auto j = nlohmann::json::parse(r.output.substr(0, r.output.find('\n')));
   CHECK(j["rank"].get<int>() < 36);
   CHECK(j["redundant"].size() == 54 - j["rank"].get<size_t>());
   CHECK(j["rms_mm"].get<double>() < 0.1);
+  CHECK(j["problems"].size() == 1);
+}
+
+TEST_CASE("robocal solve prints the parameter table and the residual per shell") {
+  TempDir dir;
+  simulate(dir);
+  auto r = runRobocal("solve --model " + kModel + " " + (dir / "s.csv"));
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  CHECK_THAT(r.output, Contains("  name       unit        nominal     calibrated       change    "
+                                "1-sigma\n  L0.x       mm        -550.0000"));
+  CHECK_THAT(r.output, Contains("  J1.gain    gain       1.000000"));
+  CHECK_THAT(r.output, Contains("  L0.rz      deg         0.00000        0.00000     +0.00000      "
+                                "fixed\n"));
+  CHECK_THAT(r.output, Contains("  shell  connection        n   RMS (mm)   max (mm)  mean (mm)  "
+                                "RMS/median\n      1  B1C1"));
+  CHECK_THAT(r.output, Contains("worst shells: "));
+
+  // The JSON has the same tables, with the unit in every key.
+  r = runRobocal("solve --model " + kModel + " " + (dir / "s.csv") + " --json");
+  REQUIRE(r.exit_code == 0);
+  const auto j = nlohmann::json::parse(r.output);
+  REQUIRE(j["parameter_table"].size() == 54);
+  const auto& l0x = j["parameter_table"][0];
+  CHECK(l0x["name"] == "L0.x");
+  CHECK(l0x["unit"] == "mm");
+  CHECK(l0x["nominal_mm"] == -550.0);
+  CHECK(l0x["change_mm"].get<double>() ==
+        Approx(l0x["calibrated_mm"].get<double>() - l0x["nominal_mm"].get<double>()));
+  CHECK(l0x["sigma_mm"].get<double>() > 0);
+  int estimated = 0;
+  for (const auto& p : j["parameter_table"]) {
+    estimated += p["estimated"].get<bool>();
+    if (!p["estimated"].get<bool>()) CHECK(p["sigma_" + p["unit"].get<std::string>()].is_null());
+  }
+  CHECK(estimated == 36);
+  CHECK(j["parameter_table"][7]["name"] == "J1.gain");
+  CHECK(j["parameter_table"][7].contains("sigma_gain"));
+  REQUIRE(j["shells"].size() == 9);
+  CHECK(j["shells"][0]["connection"] == "B1C1");
+  CHECK(j["worst_shells"].size() == 3);
+  CHECK(j["problems"].empty());
+}
+
+TEST_CASE("robocal solve names a bad shell among good ones") {
+  TempDir dir;
+  simulate(dir);
+  // Shell 4's lengths get three times the noise: its RMS stands out, as a loose chuck's would.
+  std::string text = readTextFile(dir / "s.csv");
+  std::istringstream in(text);
+  std::ostringstream out;
+  std::mt19937 rng(1);
+  std::normal_distribution<double> noise(0.0, 0.25);
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("4,", 0) == 0) {
+      const size_t comma = line.rfind(',');
+      line = line.substr(0, comma + 1) +
+             std::to_string(std::stod(line.substr(comma + 1)) + noise(rng));
+    }
+    out << line << "\n";
+  }
+  std::ofstream(dir / "s.csv") << out.str();
+  const auto r = runRobocal("solve --model " + kModel + " " + (dir / "s.csv") + " --json");
+  REQUIRE(r.exit_code == 0);
+  const auto j = nlohmann::json::parse(r.output);
+  CHECK(j["worst_shells"][0] == 4);
+  for (const auto& shell : j["shells"]) CHECK(shell["stands_out"] == (shell["shell"] == 4));
+}
+
+TEST_CASE("robocal solve refuses to write a model from data that cannot calibrate") {
+  TempDir dir;
+  simulate(dir);
+  const std::string text = readTextFile(dir / "s.csv");
+  size_t end = 0;
+  for (int line = 0; line < 6; ++line) end = text.find('\n', end) + 1;  // header + 5 samples
+  std::ofstream(dir / "five.csv") << text.substr(0, end);
+
+  SECTION("5 samples") {
+    const auto r = runRobocal("solve --model " + kModel + " " + (dir / "five.csv") + " --out " +
+                              (dir / "cal.json"));
+    INFO(r.output);
+    CHECK(r.exit_code == 3);
+    CHECK_THAT(r.output, Contains("refused") && Contains("rank 5 of the 36") &&
+                             Contains("no model written") && Contains("--allow-partial"));
+    CHECK_FALSE(std::filesystem::exists(dir / "cal.json"));
+  }
+  SECTION("2 shells") {
+    REQUIRE(runRobocal("simulate --model " + kModel + " --connections B1C1,B2C2 --out " +
+                       (dir / "two.csv"))
+                .exit_code == 0);
+    const auto r = runRobocal("solve --model " + kModel + " " + (dir / "two.csv") + " --out " +
+                              (dir / "cal.json"));
+    INFO(r.output);
+    CHECK(r.exit_code == 3);
+    CHECK_THAT(r.output, Contains("of the 36 independent parameters") &&
+                             Contains("2 of the 9 connections (B1C1,B2C2)"));
+    CHECK_FALSE(std::filesystem::exists(dir / "cal.json"));
+  }
+  SECTION("a predicted error above the nominal model's") {
+    // Full rank, but 6 points a shell with 1.5 mm of noise pin nothing.
+    REQUIRE(runRobocal("simulate --model " + kModel +
+                       " --seed 3 --noise-mm 1.5 --points-per-shell 6 --out " + (dir / "noisy.csv"))
+                .exit_code == 0);
+    const auto r = runRobocal("solve --model " + kModel + " " + (dir / "noisy.csv") + " --out " +
+                              (dir / "cal.json"));
+    INFO(r.output);
+    CHECK(r.exit_code == 3);
+    CHECK_THAT(r.output, Contains("rank: 36 of 54") &&
+                             Contains("exceeds the nominal model's error on these samples"));
+    CHECK_FALSE(std::filesystem::exists(dir / "cal.json"));
+  }
+  SECTION("--allow-partial writes it, with a warning kept in its provenance") {
+    const auto r = runRobocal("solve --model " + kModel + " " + (dir / "five.csv") + " --out " +
+                              (dir / "cal.json") + " --allow-partial");
+    INFO(r.output);
+    CHECK(r.exit_code == 0);
+    CHECK_THAT(r.output,
+               Contains("warning") && Contains("rank 5 of the 36") && Contains("written anyway"));
+    const Model cal = loadModelFile(dir / "cal.json");
+    REQUIRE(cal.provenance);
+    REQUIRE(cal.provenance->warnings.size() >= 1);
+    CHECK_THAT(cal.provenance->warnings[0], Contains("rank 5 of the 36"));
+    CHECK(cal.provenance->rank == 5);
+  }
+}
+
+TEST_CASE("the calibrated model says where it came from") {
+  TempDir dir;
+  simulate(dir);
+  const auto r = runRobocal("solve --model " + kModel + " " + (dir / "s.csv") + " --out " +
+                            (dir / "cal.json") + " --json");
+  REQUIRE(r.exit_code == 0);
+  const auto j = nlohmann::json::parse(r.output);
+  const Model nominal = loadModelFile(kModel);
+  const Model cal = loadModelFile(dir / "cal.json");
+  CHECK_THAT(cal.name, Contains(nominal.name + " calibrated 20"));
+  REQUIRE(cal.provenance);
+  const ModelProvenance& p = *cal.provenance;
+  CHECK(p.run_id.empty());
+  CHECK(p.date_utc.size() == 20);  // 2026-12-01T20:42:54Z
+  CHECK(p.nominal_name == nominal.name);
+  CHECK(p.samples_files == std::vector<std::string>{dir / "s.csv"});
+  CHECK(p.samples == j["n"].get<size_t>());
+  CHECK(p.rms_mm == j["rms_mm"].get<double>());
+  CHECK(p.rank == 36);
+  CHECK(p.expected_rank == 36);
+  CHECK_FALSE(p.robocal_version.empty());
+  CHECK(p.warnings.empty());
 }

@@ -108,6 +108,26 @@ TEST_CASE("a full run to RESULT recovers the true robot", "[e2e]") {
   CHECK(result["rank"] == 36);
   CHECK(result["rms_before_mm"].get<double>() > 0.2);
   CHECK(result["rms_mm"].get<double>() < 0.05);
+  // The RESULT is `robocal solve --json` of the run's samples file plus the run's own keys: both
+  // assess the fit with the same code (solver/assessment.hpp, formats/report.hpp).
+  const auto solved = runRobocal("solve --model " + kModel + " " +
+                                 result["samples_file"].get<std::string>() + " --json");
+  REQUIRE(solved.exit_code == 0);
+  json without_run_keys = result;
+  for (const char* key :
+       {"run", "set", "extension_mm", "calibrated_file", "report_dir", "samples_file"})
+    without_run_keys.erase(key);
+  CHECK(json::parse(solved.output) == without_run_keys);
+  CHECK(result["parameter_table"].size() == 54);
+  CHECK(result["shells"].size() == 6);
+  // The run folder has the fit's one-page summary, and the model says where it came from.
+  CHECK(readTextFile(result["report_dir"].get<std::string>() + "/summary.html").size() > 1000);
+  const Model calibrated = loadModelFile(result["calibrated_file"].get<std::string>());
+  REQUIRE(calibrated.provenance);
+  CHECK(calibrated.provenance->run_id == result["run"].get<std::string>());
+  CHECK(calibrated.provenance->samples_files ==
+        std::vector<std::string>{result["samples_file"].get<std::string>()});
+  CHECK(calibrated.provenance->samples == result["n"].get<size_t>());
   // The bar never left its range (cellsim counts it), and the daemon said what it did.
   CHECK(cell.sim->status("broken_events") == "0");
   int samples_seen = 0, prompts = 0;

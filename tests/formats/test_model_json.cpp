@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 
 #include <robocal/formats/model_json.hpp>
+#include <robocal/formats/report.hpp>
 #include <robocal/kinematics/puma560.hpp>
 
 #include <nlohmann/json.hpp>
@@ -84,6 +85,29 @@ TEST_CASE("a calibrated model's provenance survives the round trip, older files 
                       j["provenance"] = {{"samples_files", {1}}};
                     })),
                     Contains("provenance.samples_files[0]: expected a string"));
+}
+
+TEST_CASE("the calibrated model is named after its nominal and the day, with its provenance") {
+  FitAssessment fit;
+  fit.nominal = puma560NominalModel();
+  fit.calibrated = fit.nominal;
+  fit.samples.resize(12);
+  fit.fit.after.rms_mm = 0.031;
+  fit.fit.identifiability.rank = 33;
+  fit.problems = {"rank 33 of the 36"};
+  const auto made = std::chrono::system_clock::from_time_t(1796157774);  // 2026-12-01T20:42:54Z
+  const Model m = calibratedModel(fit, {"run-7", {"s.csv"}}, made);
+  CHECK(m.name == fit.nominal.name + " calibrated 2026-12-01");
+  REQUIRE(m.provenance);
+  CHECK(m.provenance->run_id == "run-7");
+  CHECK(m.provenance->date_utc == "2026-12-01T20:42:54Z");
+  CHECK(m.provenance->samples_files == std::vector<std::string>{"s.csv"});
+  CHECK(m.provenance->samples == 12);
+  CHECK(m.provenance->rms_mm == 0.031);
+  CHECK(m.provenance->rank == 33);
+  CHECK(m.provenance->expected_rank == 36);
+  CHECK(m.provenance->robocal_version == std::string(robocalVersion()));
+  CHECK(m.provenance->warnings == fit.problems);
 }
 
 TEST_CASE("bad model files name the key and the problem") {

@@ -1,37 +1,59 @@
-// The fit report (robocal solve --report DIR): report.json with the summary and every figure's
-// data, and the paper's Figures 3 and 4 as SVG files a person opens: residual against longitude
-// (one series per shell) and the residual histogram with the fitted normal curve.
+// The outputs of a fit (solver/assessment.hpp), the same for robocal solve and robocald:
+// - fitSummaryJson: the object `robocal solve --json` prints and robocald's RESULT carries (with
+//   the daemon's run keys added): the headline numbers, the parameter table, the shells, the
+//   problems;
+// - calibratedModel: the calibrated model as written, named "<nominal> calibrated <date>" with its
+//   provenance (docs/model-format.md);
+// - writeReport: DIR/report.json (the summary and every figure's data), the paper's Figures 3 and 4
+//   as SVG (residual against longitude, one series per shell; the residual histogram with its
+//   fitted normal curve), the residual RMS per shell, the same for the held-out samples, and
+//   DIR/summary.html, one self-contained page with the numbers, tables and figures.
+// Units: mm and deg, named in every key (gains are unitless: "gain").
 #pragma once
 
 #include <robocal/kinematics/sample.hpp>
-#include <robocal/solver/calibrate.hpp>
+#include <robocal/solver/assessment.hpp>
 
+#include <chrono>
 #include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
 
 namespace robocal {
 
-struct FitReport {
-  const Model& nominal;
-  const Model& calibrated;
-  const std::vector<Sample>& samples;  // those fitted
-  const SolveResult& fit;
-  const std::vector<Outlier>& outliers;   // found in the first fit
-  const std::vector<Sample>& dropped;     // outliers removed before the refit (may be empty)
-  const std::vector<Sample>& validation;  // held-out samples (may be empty)
-  const Eigen::VectorXd& validation_residuals;
-  double ball_error_rms_mm;
-  double ball_error_max_mm;
-  double bar_to_endpoint_factor;
-  TruthComparison truth;  // poses == 0 when no truth was given
-  double outlier_sigmas;
+// "mm", "deg" or "gain": the unit of parameter `index` in tables and key names.
+const char* paramUnitLabel(int index);
+// A parameter value in its unit with the table's precision: 4 decimals in mm, 5 in deg, 6 for a
+// gain; `sign` writes + for positive values (changes).
+std::string formatParamValue(int index, double value, bool sign = false);
+
+// "B1C2" and "B1C2 +150 mm" for a shell with an extension.
+std::string shellConnectionText(const ShellResiduals& shell);
+
+// The version of robocal recorded in what it writes.
+const char* robocalVersion();
+
+// Where a fit's data came from, for the calibrated model's provenance.
+struct FitOrigin {
+  std::string run_id;  // the robocald run, "" for robocal solve
+  std::vector<std::string> samples_files;
 };
 
-// The summary robocal solve --json prints: rms_mm, rms_before_mm, n, rank, iterations, ... and
-// validation_rms_mm when there is validation data.
-nlohmann::ordered_json fitSummaryJson(const FitReport& report);
+// The model to write: the fitted parameters named "<nominal name> calibrated <YYYY-MM-DD>" (UTC)
+// with a provenance: run, date, samples files and count, RMS, rank, version, and the fit's
+// problems as warnings.
+Model calibratedModel(
+    const FitAssessment& fit, const FitOrigin& origin,
+    std::chrono::system_clock::time_point made = std::chrono::system_clock::now());
 
-// Writes DIR/report.json, DIR/residuals_vs_longitude.svg, DIR/residual_histogram.svg and, with
-// validation data, DIR/validation_vs_longitude.svg and DIR/validation_histogram.svg.
-void writeReport(const std::string& dir, const FitReport& report);
+// The summary: class "RESULT", n, rank, expected_rank, problems, rms_before_mm, rms_mm, ...,
+// parameter_table, shells, worst_shells, and validation_* and truth_* when there are such data
+// (docs/calibration.md lists every key).
+nlohmann::ordered_json fitSummaryJson(const FitAssessment& fit);
+
+// Writes DIR/report.json, DIR/summary.html, DIR/residuals_vs_longitude.svg,
+// DIR/residual_histogram.svg, DIR/shell_rms.svg and, with held-out samples, DIR/validation_*.svg.
+// `calibrated` is the model as written (its name and provenance head the summary page).
+void writeReport(const std::string& dir, const FitAssessment& fit, const Model& calibrated);
 
 }  // namespace robocal

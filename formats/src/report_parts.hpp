@@ -1,0 +1,29 @@
+// Inside formats: the pieces report.cpp and summary_html.cpp share. Not installed.
+#pragma once
+
+#include <robocal/solver/assessment.hpp>
+
+#include <string>
+#include <vector>
+
+namespace robocal::report_detail {
+
+// Text made safe for XML and HTML: & < > " ' escaped.
+std::string escapeXml(const std::string& text);
+
+// printf of up to four numbers into a string.
+std::string fmt(const char* format, double a, double b = 0, double c = 0, double d = 0);
+
+// A figure the report wrote: its file name in the report folder, a caption, and its SVG text.
+struct Figure {
+  std::string file;
+  std::string caption;
+  std::string svg;
+};
+
+// The one-page summary: the model's name and provenance, the problems, the headline numbers, the
+// per-shell and parameter tables, and the figures inline (each linked to its file).
+std::string summaryHtml(const FitAssessment& fit, const Model& calibrated,
+                        const std::vector<Figure>& figures);
+
+}  // namespace robocal::report_detail
