@@ -118,8 +118,8 @@ std::string statusText(const json& s) {
     out += "bar: " + format("%+.4f mm deflection", s["bar"]["deflection_mm"].get<double>()) + "\n";
   if (s.value("bar_attached", false))
     out += "the ball-bar may be attached to the robot: the next run asks to detach it first\n";
-  if (s.contains("resumable") && !s["resumable"].is_null())
-    out += "resumable run: " + s["resumable"].dump() + " (robocal resume)\n";
+  if (!s.value("resumable", "").empty())
+    out += "resumable run: " + s.value("resumable", "") + " (robocal resume)\n";
   if (s.contains("clients")) out += "clients: " + s["clients"].dump() + "\n";
   if (s.contains("prompt") && s["prompt"].is_object()) out += promptText(s["prompt"]);
   return out;

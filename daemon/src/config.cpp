@@ -91,6 +91,8 @@ DaemonConfig daemonConfigFromJson(const json& root, const std::string& source,
   r.number("bar_soft_limit_mm", c.bar_soft_limit_mm, 0.01, 100);
   r.number("bar_hard_limit_mm", c.bar_hard_limit_mm, 0.01, 100);
   r.boolean("centering", c.centering);
+  r.number("connection_check_mm", c.connection_check_mm, 0, 5);
+  r.number("detached_change_mm", c.detached_change_mm, 0.01, 100);
   r.integer("max_clients", c.max_clients, 1, 10000);
   r.integer("max_line_bytes", c.max_line_bytes, 256, 16 * 1024 * 1024);
   r.integer("client_queue_max", c.client_queue_max, 16, 1000000);

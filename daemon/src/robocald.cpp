@@ -115,17 +115,13 @@ class Daemon {
                                   : proto::errorObject(error, proto::cmdName(req.cmd)));
     };
     switch (req.cmd) {
-      case proto::Cmd::kStatus: {
-        json s = run_.status();
-        s["clients"] = hub_.clientCount();
-        if (plan_) s["plan"] = planObject(*plan_, plan_source_);
-        hub_.send(id, s);
+      case proto::Cmd::kStatus:
+        hub_.send(id, status());
         break;
-      }
       case proto::Cmd::kWatch:
         hub_.setWatching(id, req.watch_enable);
         hub_.send(id, {{"class", "WATCH"}, {"enable", req.watch_enable}});
-        if (req.watch_enable) hub_.send(id, run_.status());
+        if (req.watch_enable) hub_.send(id, status());
         break;
       case proto::Cmd::kResult:
         hub_.send(id, run_.result());
@@ -139,11 +135,13 @@ class Daemon {
       case proto::Cmd::kStart:
         if (!req.plan_path.empty() || !plan_)
           makePlan(id, req.plan_path, {}, true);
-        else
+        else {
+          hub_.send(id, planObject(*plan_, plan_source_));  // the plan the run will follow
           reply(run_.start(*plan_), "run starting with " + plan_source_);
+        }
         break;
       case proto::Cmd::kConfirm:
-        reply(run_.confirm(req.shell));
+        reply(run_.confirm(req.shell), "the run goes on");
         break;
       case proto::Cmd::kNudge:
         reply(run_.nudge(req.shell, req.nudge_mm), "moving the ball");
@@ -154,10 +152,20 @@ class Daemon {
       case proto::Cmd::kResume:
         reply(run_.resume(req.run_id), "resuming");
         break;
-      case proto::Cmd::kAbort:
-        reply(run_.abort(req.reason), "robot stopped, run aborted");
+      case proto::Cmd::kAbort: {
+        const RunController::Answer a = run_.abort(req.reason);
+        reply(a.error, a.message);
         break;
+      }
     }
+  }
+
+  // The run's STATUS with what the daemon itself knows: its clients and its plan.
+  json status() const {
+    json s = run_.status();
+    s["clients"] = hub_.clientCount();
+    s["plan"] = plan_ ? planObject(*plan_, plan_source_) : json();
+    return s;
   }
 
   // Loads or makes a plan on a worker thread (planning takes up to seconds), then replies on the
@@ -174,6 +182,7 @@ class Daemon {
     std::thread([this, id, path, cell_path, then_start] {
       std::optional<Plan> plan;
       std::string source, error;
+      json violation_list = json::array();
       try {
         if (!path.empty()) {
           plan = loadPlanFile(path);
@@ -184,19 +193,24 @@ class Daemon {
                                       ? *cell_
                                       : throw std::runtime_error("no cell configured to plan with");
           plan = planCell(nominal_, cell);
+          summarizeIdentifiability(nominal_, *plan);
           source = !cell_path.empty() ? cell_path : config_.cell;
         }
         const auto violations = checkPlan(nominal_, cell_ ? *cell_ : plan->cell, *plan);
+        for (const auto& v : violations) violation_list.push_back(describeViolation(v));
         if (!violations.empty())
           error = source + ": " + std::to_string(violations.size()) +
                   " safety violations, first: " + describeViolation(violations.front());
       } catch (const std::exception& e) {
         error = e.what();
       }
-      asio::post(io_, [this, id, plan = std::move(plan), source, error, then_start]() mutable {
+      asio::post(io_, [this, id, plan = std::move(plan), source, error, then_start,
+                       violation_list = std::move(violation_list)]() mutable {
         planning_ = false;
         if (!error.empty()) {
-          hub_.send(id, proto::errorObject(error, then_start ? "start" : "plan"));
+          json e = proto::errorObject(error, then_start ? "start" : "plan");
+          if (!violation_list.empty()) e["violations"] = violation_list;
+          hub_.send(id, e);
           return;
         }
         plan_ = std::move(plan);

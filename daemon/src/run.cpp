@@ -1,5 +1,9 @@
 #include <robocal/daemon/run.hpp>
 
+#include <robocal/daemon/connection_check.hpp>
+#include <robocal/daemon/shell_watch.hpp>
+#include <robocal/daemon/time_left.hpp>
+
 #include <robocal/drivers/bar.hpp>
 #include <robocal/drivers/errors.hpp>
 #include <robocal/drivers/val.hpp>
@@ -9,6 +13,7 @@
 #include <robocal/kinematics/kinematics.hpp>
 #include <robocal/planner/check.hpp>
 #include <robocal/planner/plan_json.hpp>
+#include <robocal/proto/protocol.hpp>
 #include <robocal/solver/calibrate.hpp>
 
 #include <spdlog/spdlog.h>
@@ -86,6 +91,21 @@ struct PointTiming {
   }
 };
 
+proto::BarKind wireKind(drivers::BarLineKind kind) {
+  switch (kind) {
+    case drivers::BarLineKind::kReading:
+      return proto::BarKind::kReading;
+    case drivers::BarLineKind::kOverRange:
+      return proto::BarKind::kOverRange;
+    case drivers::BarLineKind::kNoProbe:
+      return proto::BarKind::kNoProbe;
+    case drivers::BarLineKind::kDeviceError:
+    case drivers::BarLineKind::kGarbage:
+      break;
+  }
+  return proto::BarKind::kDeviceError;
+}
+
 // A data point of a shell, as the samples file identifies it.
 std::pair<double, double> pointKey(double lat_deg, double lon_deg) {
   return {std::round(lat_deg * 1e3) / 1e3, std::round(lon_deg * 1e3) / 1e3};
@@ -120,9 +140,12 @@ struct RunController::Impl {
   double nudged_mm = 0;            // done for the pending prompt
   int shell_number = 0, shells_total = 0, points_done = 0, points_total = 0;
   double eta_s = 0;
+  std::string connection_name;  // the shell's connection, e.g. "B1C3"
   json latest_bar;
   json last_result;
   bool val_connected = false, bar_connected = false;
+  std::string val_error, bar_error;  // why a device is not connected ("" when it is)
+  BarAttachment attachment;          // persisted in <data_dir>/bar.json
   std::atomic<bool> abort_requested{false}, pause_requested{false}, quit{false};
   std::string stop_reason;
 
@@ -164,6 +187,13 @@ struct RunController::Impl {
                    last_result["set"].get<long>());
     }
     for (const std::string& why : unreadable) spdlog::warn("result file skipped: {}", why);
+    std::string bar_problem;
+    attachment = store.barAttachment(&bar_problem);
+    if (!bar_problem.empty()) spdlog::warn("{}", bar_problem);
+    if (attachment.maybe_attached)
+      spdlog::info("the ball-bar may be attached (since run {}): the next run asks to detach it",
+                   attachment.run.empty() ? "?" : attachment.run);
+    connectDevices();  // the ports' state is in the log from the start
     thread = std::thread([this] { threadMain(); });
   }
 
@@ -211,7 +241,7 @@ struct RunController::Impl {
     if (collecting && r.kind == drivers::BarLineKind::kReading) window.push_back(r.value_mm);
     json b = {{"class", "BAR"},
               {"seq", r.sequence},
-              {"kind", drivers::barLineKindName(r.kind)},
+              {"kind", proto::barKindName(wireKind(r.kind))},
               {"t_us", monotonicMicros(r.time)}};
     if (r.kind == drivers::BarLineKind::kReading) {
       b["deflection_mm"] = r.value_mm;
@@ -224,25 +254,65 @@ struct RunController::Impl {
     publish(b, true);
   }
 
-  void ensureDevices(bool need_val) {
-    if (!bar) {
-      bar = std::make_unique<drivers::BarReader>(io, config.drivers.bar);
-      bar->onLine([this](const drivers::BarReading& r) { onBarLine(r); });
-    }
-    if (!bar->isConnected()) {
-      bar->connect();
-      spdlog::info("ball-bar reader connected");
-    }
-    if (need_val) {
-      if (!val) val = std::make_unique<drivers::ValController>(io, config.drivers.val);
-      if (!val->isConnected()) {
-        val->connect();
-        spdlog::info("VAL II controller connected");
+  // Connects each device that is not connected and records the outcome for STATUS and `start`;
+  // the log says each change of a port's state (connected, or why not). Never throws.
+  void connectDevices() {
+    const auto attempt = [](const char* name, const drivers::SerialConfig& port, bool was_connected,
+                            const std::string& old_error, const std::function<void()>& connect) {
+      std::string error;
+      try {
+        connect();
+      } catch (const std::exception& e) {
+        error = e.what();
+        if (error.empty()) error = "cannot connect";
       }
-    }
+      const std::string where = !port.path.empty() ? port.path
+                                : !port.usb_serial.empty()
+                                    ? "USB serial " + port.usb_serial
+                                    : "USB description \"" + port.usb_description + "\"";
+      if (error.empty() && !was_connected)
+        spdlog::info("{} connected ({})", name, where);
+      else if (!error.empty() && (was_connected || error != old_error))
+        spdlog::warn("{} not connected ({}): {}", name, where, error);
+      return error;
+    };
+    std::string bar_err = attempt(
+        "ball-bar reader", config.drivers.bar.serial, bar && bar->isConnected(), bar_error, [&] {
+          if (!bar) {
+            bar = std::make_unique<drivers::BarReader>(io, config.drivers.bar);
+            bar->onLine([this](const drivers::BarReading& r) { onBarLine(r); });
+          }
+          if (!bar->isConnected()) bar->connect();
+        });
+    std::string val_err = attempt(
+        "VAL II controller", config.drivers.val.serial, val && val->isConnected(), val_error, [&] {
+          if (!val) val = std::make_unique<drivers::ValController>(io, config.drivers.val);
+          if (!val->isConnected()) val->connect();
+        });
     std::lock_guard lock(mutex);
+    bar_error = std::move(bar_err);
+    val_error = std::move(val_err);
     bar_connected = bar && bar->isConnected();
     val_connected = val && val->isConnected();
+  }
+
+  // Before a run: both devices answer, or the run stops with the port's error.
+  void ensureDevices() {
+    connectDevices();
+    std::lock_guard lock(mutex);
+    if (!bar_connected) throw StopRun{StopRun::kFault, "ball-bar reader: " + bar_error};
+    if (!val_connected) throw StopRun{StopRun::kFault, "VAL II controller: " + val_error};
+  }
+
+  // The bar may be attached from now on (or no longer), on disk before anything moves.
+  void setAttachment(const BarAttachment& a) {
+    store.setBarAttachment(a);
+    std::lock_guard lock(mutex);
+    attachment = a;
+  }
+  bool barMaybeAttached() const {
+    std::lock_guard lock(mutex);
+    return attachment.maybe_attached;
   }
 
   // Runs the driver loop for a while (bar lines arrive), checking stop requests.
@@ -279,16 +349,47 @@ struct RunController::Impl {
     if (recentre && std::abs(d) > config.bar_soft_limit_mm) throw Recentre{d};
   }
 
-  // A joint move, watched: stop requests, the bar (when attached), controller errors.
+  // A joint move, watched: stop requests, controller errors, and the bar. With the bar attached
+  // its limits; believed detached, a reading that changes (the bar is still attached after all).
   JointsDeg move(const JointsDeg& target, bool bar_attached, bool recentre) {
     checkpoint();
     if (bar_attached) watchBar(recentre);  // nothing starts with the bar already in fault
+    std::optional<double> detached_reading;
+    if (!bar_attached && last_reading && last_reading->kind == drivers::BarLineKind::kReading)
+      detached_reading = last_reading->value_mm;
     const drivers::WhereReply w =
         val->moveJoints(toDriver(target), [&](const drivers::WhereReply&) {
           checkpoint();
-          if (bar_attached) watchBar(recentre);
+          if (bar_attached)
+            watchBar(recentre);
+          else
+            watchDetached(detached_reading);
         });
     return fromDriver(w.joints_deg);
+  }
+
+  // The bar is believed detached: a reading in range that moves with the robot (or runs out of
+  // range) says otherwise.
+  void watchDetached(const std::optional<double>& reading_at_start) {
+    if (!reading_at_start || !last_reading) return;
+    const bool over_range = last_reading->kind == drivers::BarLineKind::kOverRange;
+    if (last_reading->kind != drivers::BarLineKind::kReading && !over_range) return;
+    const double change_mm = over_range ? std::numeric_limits<double>::infinity()
+                                        : last_reading->value_mm - *reading_at_start;
+    if (std::abs(change_mm) <= config.detached_change_mm) return;
+    BarAttachment doubt = attachmentNow();
+    doubt.maybe_attached = true;
+    setAttachment(doubt);  // the next start or resume asks to detach it first
+    char buf[64];
+    std::snprintf(buf, sizeof buf, over_range ? "from %+.3f mm to over range" : "by %+.3f mm",
+                  over_range ? *reading_at_start : change_mm);
+    throw StopRun{StopRun::kFault, std::string("the ball-bar reading changed ") + buf +
+                                       " while the robot moved with the bar believed detached: "
+                                       "check that the bar is off the robot"};
+  }
+  BarAttachment attachmentNow() const {
+    std::lock_guard lock(mutex);
+    return attachment;
   }
 
   // Faults the drivers absorb (a garbled or cut-off bar line, a WHERE asked again) leave no pause
@@ -454,19 +555,68 @@ struct RunController::Impl {
     return target;
   }
 
-  void updateProgress(int done, int total, Clock::time_point started, int done_at_start) {
-    const double elapsed = std::chrono::duration<double>(Clock::now() - started).count();
-    const int measured = done - done_at_start;
+  void updateProgress(int done, int total, double time_left_s) {
     json p;
     {
       std::lock_guard lock(mutex);
       points_done = done;
       points_total = total;
-      eta_s = measured > 0 ? elapsed / measured * (total - done) : 0;
-      p = {{"class", "PROGRESS"}, {"shell", shell_number}, {"shells", shells_total},
-           {"points_done", done}, {"points_total", total}, {"eta_s", eta_s}};
+      eta_s = time_left_s;
+      p = {{"class", "PROGRESS"},    {"shell", shell_number},
+           {"shells", shells_total}, {"connection", connection_name},
+           {"points_done", done},    {"points_total", total},
+           {"eta_s", eta_s}};
     }
     publish(p, false);
+  }
+
+  // The robot time a data point of this shell takes by the plan's duration model, with this
+  // daemon's dwell and bar window in place of the cell's planned dwell.
+  double plannedPointSeconds(const ShellPlan& shell, const CellConfig& cell_config) const {
+    const ShellSummary& s = shell.summary;
+    if (s.points <= 0) return 0;
+    const double moves_s = std::max(0.0, s.duration_s - s.points * cell_config.motion.settle_s);
+    return moves_s / s.points + config.settle_s + config.bar_window_s;
+  }
+
+  // After a connect: the ball moves a small step along the expected bar line and back past the
+  // start, and the bar must follow (connection_check.hpp). The ball ends where it started.
+  void verifyConnection(RunDir& dir, const Model& model, const CellConfig& cell_config,
+                        const ShellPlan& shell, JointsDeg& q) {
+    const double step_mm = std::min(config.connection_check_mm, 0.4 * config.bar_soft_limit_mm);
+    if (step_mm <= 0) return;
+    // Averaged over at least half a second: the steps are tenths of a millimetre, the noise of
+    // one reading a few hundredths.
+    const auto settledMeasurement = [&] {
+      spin(config.settle_s, true);
+      return measureHere(std::max(config.bar_window_s, 0.5));
+    };
+    const JointsDeg start = q;
+    double before_mm = settledMeasurement().deflection_mm;
+    // Toward zero first: the bar stays inside its soft limit all the way.
+    const double sign = before_mm > 0 ? -1.0 : 1.0;
+    std::vector<ProbeStep> steps;
+    json record = json::array();
+    for (const double commanded_mm : {sign * step_mm, -2.0 * sign * step_mm}) {
+      q = move(correction(model, cell_config, shell, q, -commanded_mm), true, false);
+      const double after_mm = settledMeasurement().deflection_mm;
+      steps.push_back({commanded_mm, after_mm - before_mm});
+      record.push_back(
+          {{"commanded_mm", commanded_mm}, {"reading_change_mm", after_mm - before_mm}});
+      before_mm = after_mm;
+    }
+    q = move(start, true, false);
+    const std::string problem = connectionCheckProblem(steps);
+    event(dir, {{"event", "connection_check"},
+                {"shell", shell.shell},
+                {"connection", connectionName(shell.connection)},
+                {"steps", record},
+                {"ok", problem.empty()}});
+    if (!problem.empty())
+      throw StopRun{StopRun::kFault,
+                    "connection check on shell " + std::to_string(shell.shell) + " (ball " +
+                        std::to_string(shell.connection.ball_index + 1) + ", chuck " +
+                        std::to_string(shell.connection.chuck_index + 1) + "): " + problem};
   }
 
   void launchFit(RunDir dir, std::vector<Sample> all, double set_extension_mm, int set_index) {
@@ -557,7 +707,8 @@ struct RunController::Impl {
   };
   // The bar averaged over bar_window_s and the actual joints (WHERE) read within that window,
   // watched. The window opens at once: the controller's answer does not delay it.
-  Measurement measureHere() {
+  Measurement measureHere() { return measureHere(config.bar_window_s); }
+  Measurement measureHere(double window_s) {
     struct Collecting {  // also when a fault ends the window early: nothing collects while idle
       bool& flag;
       explicit Collecting(bool& f) : flag(f) { flag = true; }
@@ -569,7 +720,7 @@ struct RunController::Impl {
     m.bar_window_start = Clock::now();
     m.joints_deg = fromDriver(val->where().joints_deg);
     m.where_end = Clock::now();
-    spinUntil(m.bar_window_start + fromSeconds(config.bar_window_s), true);
+    spinUntil(m.bar_window_start + fromSeconds(window_s), true);
     // The window may have passed while WHERE was answered: the bar is checked in any case.
     checkpoint();
     watchBar(false);
@@ -588,7 +739,7 @@ struct RunController::Impl {
     return m;
   }
 
-  void runShells(RunDir& dir, const Plan& plan, bool resuming) {
+  void runShells(RunDir& dir, const Plan& plan) {
     const CellConfig& cell_config = cellFor(plan);
     std::vector<Sample> samples = dir.loadSamples();
     std::set<std::tuple<int, double, double>> done;
@@ -599,15 +750,29 @@ struct RunController::Impl {
     int total = 0;
     for (const auto& sh : plan.shells)
       for (const auto& st : sh.steps) total += st.kind == StepKind::kPoint;
-    const int done_at_start = static_cast<int>(samples.size());
-    const auto started = Clock::now();
+    // Time left: the plan's robot time for the points not yet measured, at the pace measured.
+    TimeLeft time_left;
+    const auto timeLeftSeconds = [&] {
+      double planned_s = 0;
+      for (const auto& sh : plan.shells) {
+        int left = 0;
+        for (const auto& st : sh.steps) {
+          const auto [lat, lon] = pointKey(st.lat_deg, st.lon_deg);
+          left += st.kind == StepKind::kPoint && !done.count({sh.shell, lat, lon});
+        }
+        planned_s += left * plannedPointSeconds(sh, cell_config);
+      }
+      return time_left.seconds(planned_s);
+    };
     {
       std::lock_guard lock(mutex);
       shells_total = static_cast<int>(plan.shells.size());
     }
-    updateProgress(done_at_start, total, started, done_at_start);
+    updateProgress(static_cast<int>(samples.size()), total, timeLeftSeconds());
 
-    bool bar_maybe_attached = resuming;
+    // A bar left attached by an earlier run, a pause or a crash is detached before anything moves.
+    bool bar_maybe_attached = barMaybeAttached();
+    ShellWatch shell_watch;  // a connection going bad mid-shell
     // Re-plan files are numbered on from those of the run's earlier sessions (before a resume).
     int replans = 0;
     while (std::filesystem::exists(dir.file("replans/" + std::to_string(replans + 1) + ".json")))
@@ -633,21 +798,16 @@ struct RunController::Impl {
       for (const auto& st : planned.steps)
         if (st.kind == StepKind::kPoint) (is_done(st) ? already : remaining)++;
       if (remaining == 0) continue;
+      const Connection c = planned.connection;
+      const std::string conn = connectionName(c);
       {
         std::lock_guard lock(mutex);
         shell_number = planned.shell;
+        connection_name = conn;
       }
-      const Connection c = planned.connection;
-      const std::string conn = connectionName(c);
 
       if (bar_maybe_attached) {
-        bar_offset_mm = 0;
-        waitConfirm(dir,
-                    {{"class", "PROMPT"},
-                     {"action", "detach"},
-                     {"shell", planned.shell},
-                     {"message", "Detach the ball-bar from the robot, then confirm."}},
-                    planned.shell);
+        waitDetach(dir, planned.shell, "Detach the ball-bar from the robot, then confirm.");
         bar_maybe_attached = false;
       }
       setState("moving", "to shell " + std::to_string(planned.shell) + "'s connect pose");
@@ -674,6 +834,7 @@ struct RunController::Impl {
                      false);
           });
       bar_maybe_attached = true;
+      setAttachment({true, c.ball_index + 1, c.chuck_index + 1, planned.extension_mm, dir.id()});
       bar_offset_mm = cell_config.bar.nominal_length_mm + planned.extension_mm;
       // The bar must read, and read near zero, before anything moves with it attached.
       last_reading.reset();
@@ -699,6 +860,7 @@ struct RunController::Impl {
         if (!last_reading) throw StopRun{StopRun::kFault, "no ball-bar reading after re-centring"};
         watchBar(false);
       }
+      verifyConnection(dir, refined ? *refined : nominal, cell_config, planned, q);
 
       // A measurement as a sample of this shell (a data point adds its latitude and longitude).
       auto shellSample = [&](const Measurement& m) {
@@ -741,6 +903,9 @@ struct RunController::Impl {
       if (already > 0 || refined) replanFrom(0, q, already > 0 ? "resume" : "refined model");
 
       setState("measuring", "shell " + std::to_string(planned.shell) + " " + conn);
+      const double point_planned_s = plannedPointSeconds(planned, cell_config);
+      shell_watch.startShell();
+      auto pace_mark = Clock::now();  // the operator's time at prompts is not the robot's pace
       int corrections = 0;
       std::size_t next = 0;
       while (next < shell.steps.size()) {
@@ -795,7 +960,18 @@ struct RunController::Impl {
                    {"readings", m.readings},
                    {"dwell_s", dwell_s}},
                   false);
-          updateProgress(static_cast<int>(samples.size()), total, started, done_at_start);
+          const auto now = Clock::now();
+          time_left.pointMeasured(point_planned_s,
+                                  std::chrono::duration<double>(now - pace_mark).count());
+          pace_mark = now;
+          updateProgress(static_cast<int>(samples.size()), total, timeLeftSeconds());
+          if (const std::string suspect = shell_watch.point(m.deflection_mm, m.spread_mm);
+              !suspect.empty())
+            throw StopRun{StopRun::kFault,
+                          "shell " + std::to_string(planned.shell) + " " + conn + ": " + suspect +
+                              ": check that ball " + std::to_string(c.ball_index + 1) +
+                              " is tight in its socket and the bar sits in chuck " +
+                              std::to_string(c.chuck_index + 1) + ", then resume"};
           // Refit as the data grow by 5% (every sample at first): a fit costs milliseconds
           // that grow with the samples, and a model from a few more samples changes little.
           if (config.centering && next + 1 < shell.steps.size() &&
@@ -825,14 +1001,25 @@ struct RunController::Impl {
         launchFit(dir, samples, planned.extension_mm, set_index);
       }
     }
-    if (bar_maybe_attached) {
-      bar_offset_mm = 0;
-      publish({{"class", "PROMPT"},
-               {"action", "detach"},
-               {"shell", 0},
-               {"message", "The run is complete: detach the ball-bar."}},
-              false);
+    // The run ends with the bar off the robot: the next run must not move with it attached.
+    if (bar_maybe_attached)
+      waitDetach(dir, 0, "The run is complete: detach the ball-bar from the robot, then confirm.");
+  }
+
+  // Asks the operator to detach the bar (shell 0: at the end of the run) and records, once
+  // confirmed, that it is off the robot.
+  void waitDetach(RunDir& dir, int shell, const std::string& message) {
+    bar_offset_mm = 0;
+    const BarAttachment was = attachmentNow();
+    json prompt_object = {
+        {"class", "PROMPT"}, {"action", "detach"}, {"shell", shell}, {"message", message}};
+    if (was.ball > 0) {
+      prompt_object["ball"] = was.ball;
+      prompt_object["chuck"] = was.chuck;
+      prompt_object["extension_mm"] = was.extension_mm;
     }
+    waitConfirm(dir, prompt_object, shell);
+    setAttachment({});
   }
 
   void execute(Job job) {
@@ -847,6 +1034,14 @@ struct RunController::Impl {
     try {
       Plan plan = job.plan;
       if (job.kind == Job::kStart) {
+        // A port that went away since `start` was accepted: no run is made for nothing.
+        try {
+          ensureDevices();
+        } catch (const StopRun& stop) {
+          publish(proto::errorObject("run not started: " + stop.reason, "start"), false);
+          setState("error", "run not started: " + stop.reason);
+          return;
+        }
         dir = store.create(formatPlan(plan));
       } else {
         dir = store.open(job.run_id);
@@ -874,8 +1069,8 @@ struct RunController::Impl {
         setState("error", "plan failed the safety check: " + describeViolation(violations.front()));
         return;
       }
-      ensureDevices(true);
-      runShells(*dir, plan, job.kind == Job::kResume);
+      ensureDevices();
+      runShells(*dir, plan);
       reportLinkFaults(*dir);
       dir->setState({{"status", "done"}});
       dir->logEvent({{"event", "done"}});
@@ -935,14 +1130,11 @@ struct RunController::Impl {
         execute(std::move(*todo));
         continue;
       }
-      // Idle: keep the bar streaming to watchers, reconnecting now and then.
-      if (Clock::now() >= next_connect && (!bar || !bar->isConnected())) {
+      // Idle: keep the bar streaming to watchers and both ports ready, reconnecting now and then.
+      if (Clock::now() >= next_connect &&
+          (!bar || !bar->isConnected() || !val || !val->isConnected())) {
         next_connect = Clock::now() + std::chrono::seconds(2);
-        try {
-          ensureDevices(false);
-        } catch (const std::exception& e) {
-          spdlog::debug("bar not connected: {}", e.what());
-        }
+        connectDevices();
       }
       io.restart();
       io.run_for(std::chrono::milliseconds(20));
@@ -964,10 +1156,15 @@ struct RunController::Impl {
               {"points_done", points_done},
               {"points_total", points_total},
               {"eta_s", eta_s},
+              {"connection", connection_name},
+              {"bar_attached", attachment.maybe_attached},
               {"devices", {{"val", val_connected}, {"bar", bar_connected}}}};
-    if (!resumable_id.empty()) s["resumable"] = resumable_id;
-    if (!prompt.is_null()) s["prompt"] = prompt;
-    if (!latest_bar.is_null()) s["bar"] = latest_bar;
+    if (!val_error.empty()) s["devices"]["val_error"] = val_error;
+    if (!bar_error.empty()) s["devices"]["bar_error"] = bar_error;
+    // Every field is always there: null (or "") when there is nothing.
+    s["resumable"] = resumable_id;
+    s["prompt"] = prompt;
+    s["bar"] = latest_bar;
     return s;
   }
 };
@@ -992,6 +1189,13 @@ std::string RunController::start(const Plan& plan) {
   if (!impl_->resumable_id.empty() && impl_->state != "done")
     return "run " + impl_->resumable_id + " is " + impl_->state +
            ": resume it or abort it before starting another";
+  // Refused before a run folder exists: a missing port leaves no empty run in the history.
+  if (!impl_->bar_connected)
+    return "the ball-bar reader is not connected: " + impl_->bar_error +
+           " (robocald retries every 2 s; `robocal probe --bar PORT` checks the port)";
+  if (!impl_->val_connected)
+    return "the VAL II controller is not connected: " + impl_->val_error +
+           " (robocald retries every 2 s; `robocal probe --val PORT` checks the port)";
   impl_->job = Impl::Job{Impl::Job::kStart, plan, {}};
   impl_->wake.notify_all();
   return {};
@@ -1046,24 +1250,38 @@ std::string RunController::resume(const std::string& run_id) {
   return {};
 }
 
-std::string RunController::abort(const std::string& reason) {
+RunController::Answer RunController::abort(const std::string& reason) {
   std::lock_guard lock(impl_->mutex);
+  const bool running = busy(impl_->state) || impl_->job;
+  if (!running && impl_->resumable_id.empty())
+    return {"nothing to abort: no run is in progress, paused or interrupted (" + impl_->state + ")",
+            {}};
   impl_->stop_reason = reason.empty() ? "aborted by the operator" : "aborted: " + reason;
   impl_->abort_requested = true;
-  if (!busy(impl_->state) && !impl_->resumable_id.empty()) {
+  if (running)
+    return {{}, "stopping the robot; run " + impl_->run_id + " is aborted (" + impl_->state + ")"};
+  {
     // A paused or interrupted run: close it for good.
     try {
       RunDir dir = impl_->store.open(impl_->resumable_id);
       dir.setState({{"status", "aborted"}, {"reason", impl_->stop_reason}});
       dir.logEvent({{"event", "aborted"}, {"reason", impl_->stop_reason}});
     } catch (const std::exception& e) {
-      return e.what();
+      return {e.what(), {}};
     }
+    const std::string closed = impl_->resumable_id, was = impl_->state;
     impl_->resumable_id.clear();
-    impl_->state = "aborted";
     impl_->abort_requested = false;
+    impl_->state = "aborted";
+    impl_->state_reason = impl_->stop_reason;
+    // Watchers learn it like any other change (the run thread is idle: it publishes nothing).
+    impl_->publish({{"class", "STATE"},
+                    {"from", was},
+                    {"to", "aborted"},
+                    {"reason", "run " + closed + " closed: " + impl_->stop_reason}},
+                   false);
+    return {{}, "run " + closed + " (" + was + ") is closed; nothing was moving"};
   }
-  return {};
 }
 
 nlohmann::json RunController::status() const {

@@ -19,6 +19,7 @@ namespace fs = std::filesystem;
 constexpr const char* kSamplesFile = "samples.csv";
 constexpr const char* kEventsFile = "events.jsonl";
 constexpr const char* kStateFile = "state.json";
+constexpr const char* kBarFile = "bar.json";
 
 std::string isoNow() {
   const auto now = std::chrono::system_clock::now();
@@ -93,7 +94,8 @@ void RunDir::writeJson(const std::string& name, const nlohmann::json& value) con
                       value.dump(1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
 }
 
-RunStore::RunStore(std::string data_dir) : runs_dir_(data_dir + "/runs") {
+RunStore::RunStore(std::string data_dir)
+    : data_dir_(std::move(data_dir)), runs_dir_(data_dir_ + "/runs") {
   std::error_code ec;
   fs::create_directories(runs_dir_, ec);
   if (ec) throw FormatError(runs_dir_ + ": cannot create: " + ec.message());
@@ -169,6 +171,38 @@ std::optional<nlohmann::json> RunStore::latestResult(std::vector<std::string>* s
     if (best) return best;
   }
   return std::nullopt;
+}
+
+nlohmann::json BarAttachment::toJson() const {
+  return {{"maybe_attached", maybe_attached},
+          {"ball", ball},
+          {"chuck", chuck},
+          {"extension_mm", extension_mm},
+          {"run", run}};
+}
+
+BarAttachment RunStore::barAttachment(std::string* problem) const {
+  const std::string path = data_dir_ + "/" + kBarFile;
+  if (!fs::exists(path)) return {};
+  try {
+    const nlohmann::json j = nlohmann::json::parse(readTextFile(path));
+    BarAttachment b;
+    b.maybe_attached = j.at("maybe_attached").get<bool>();
+    b.ball = j.value("ball", 0);
+    b.chuck = j.value("chuck", 0);
+    b.extension_mm = j.value("extension_mm", 0.0);
+    b.run = j.value("run", "");
+    return b;
+  } catch (const std::exception& e) {
+    if (problem) *problem = path + ": " + e.what() + "; the bar is taken as attached";
+    BarAttachment doubt;
+    doubt.maybe_attached = true;
+    return doubt;
+  }
+}
+
+void RunStore::setBarAttachment(const BarAttachment& bar) const {
+  writeTextFileAtomic(data_dir_ + "/" + kBarFile, bar.toJson().dump(1) + "\n");
 }
 
 }  // namespace robocal::daemon

@@ -149,6 +149,20 @@ json errorObject(const std::string& message, const std::string& cmd) {
   return e;
 }
 
+const char* barKindName(BarKind kind) {
+  switch (kind) {
+    case BarKind::kReading:
+      return "reading";
+    case BarKind::kOverRange:
+      return "over_range";
+    case BarKind::kNoProbe:
+      return "no_probe";
+    case BarKind::kDeviceError:
+      return "device_error";
+  }
+  return "device_error";
+}
+
 json ackObject(Cmd cmd, const std::string& message) {
   json a = {{"class", "ACK"}, {"cmd", cmdName(cmd)}};
   if (!message.empty()) a["message"] = message;

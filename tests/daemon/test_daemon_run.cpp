@@ -5,6 +5,7 @@
 #include "../cli/cli_helpers.hpp"
 #include "../drivers/cellsim_process.hpp"
 #include "daemon_process.hpp"
+#include "sim_cell.hpp"
 
 #include <robocal/formats/model_json.hpp>
 #include <robocal/formats/samples_csv.hpp>
@@ -22,59 +23,6 @@ using json = nlohmann::json;
 using Catch::Matchers::Contains;
 
 namespace {
-
-struct Cell {
-  TempDir dir;
-  std::string truth_path;
-  std::unique_ptr<CellSimProcess> sim;
-  std::unique_ptr<DaemonProcess> daemon;
-
-  Cell(const std::vector<std::string>& connections, unsigned seed, bool centering = true,
-       double lon_step_deg = 60) {
-    truth_path = dir / "truth.json";
-    const auto r = runRobocal("simulate --model " + kModel + " --seed " + std::to_string(seed) +
-                              " --connections B1C1 --points-per-shell 1 --out " + (dir / "x.csv") +
-                              " --truth-out " + truth_path);
-    REQUIRE(r.exit_code == 0);
-    sim = std::make_unique<CellSimProcess>(std::vector<std::string>{
-        "--model", truth_path, "--time-scale", "50", "--bar-mode", "streamed", "--stream-hz", "100",
-        "--bar-mm", "150", "--range-mm", "2.0", "--noise-mm", "0.03"});
-    std::ofstream(dir / "cell.json") << smallCell(connections, {0}, lon_step_deg).dump(1);
-    json drivers = drivers::toJson(sim->driversConfig());
-    drivers["bar"]["mode"] = "streamed";
-    drivers["val"]["poll_interval_s"] = 0.01;
-    daemon = std::make_unique<DaemonProcess>(json{{"model", kModel},
-                                                  {"cell", dir / "cell.json"},
-                                                  {"settle_s", 0.02},
-                                                  {"bar_window_s", 0.03},
-                                                  {"bar_soft_limit_mm", 1.0},
-                                                  {"bar_hard_limit_mm", 1.6},
-                                                  {"centering", centering},
-                                                  {"drivers", drivers}});
-    daemon->start();
-  }
-
-  // Acts as the operator until the run reaches one of `states` (returns it) or the time is up
-  // (returns ""). Every object read lands in `seen`.
-  std::string operate(proto::Client& c, const std::set<std::string>& states, double timeout_s,
-                      std::vector<json>* seen = nullptr) {
-    const auto deadline =
-        std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-    while (std::chrono::steady_clock::now() < deadline) {
-      auto o = c.read(0.2);
-      if (!o) continue;
-      if (seen && (*o)["class"] != "BAR") seen->push_back(*o);
-      const std::string cls = (*o)["class"];
-      if (cls == "PROMPT" && (*o)["shell"].get<int>() > 0)
-        proto::answerPrompt(
-            c, *o, [&](const std::string& cmd) { return sim->control(cmd); }, daemon->token(), 150);
-      if (cls == "STATE" && states.count((*o)["to"])) return (*o)["to"];
-    }
-    return "";
-  }
-
-  std::string runDir(const std::string& id) const { return daemon->dataDir() + "/runs/" + id; }
-};
 
 std::set<std::tuple<int, long, long>> keys(const std::vector<Sample>& samples) {
   std::set<std::tuple<int, long, long>> out;

@@ -27,6 +27,13 @@ struct DaemonConfig {
   double bar_soft_limit_mm = 1.0;  // |deflection| past this during a move: stop and re-centre
   double bar_hard_limit_mm = 1.8;  // past this: stop the robot and pause the run
   bool centering = true;           // refine the model and re-plan while a shell runs
+  // After each connect: the ball moves this far out and in along the bar, and the reading must
+  // follow (a free bar or a wrong chuck does not); 0 turns the check off. Capped at 0.4 x the
+  // soft limit.
+  double connection_check_mm = 0.5;
+  // A reading that changes this much while the robot moves with the bar believed detached stops
+  // the robot: the bar is still attached.
+  double detached_change_mm = 0.25;
   int max_clients = 64;
   std::size_t max_line_bytes = 16 * 1024;
   std::size_t client_queue_max = 4096;  // messages queued to one client; past it readings drop

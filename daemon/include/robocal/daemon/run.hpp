@@ -43,7 +43,11 @@ class RunController {
   std::string nudge(std::optional<int> shell, double mm);
   std::string pause(const std::string& reason);
   std::string resume(const std::string& run_id);
-  std::string abort(const std::string& reason);
+  // What a command did, for the operator: `error` when refused, else `message` says what happened.
+  struct Answer {
+    std::string error, message;
+  };
+  Answer abort(const std::string& reason);
 
   nlohmann::json status() const;  // a STATUS object
   nlohmann::json result() const;  // the latest RESULT object (or an empty one)

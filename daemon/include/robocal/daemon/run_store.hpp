@@ -35,6 +35,18 @@ class RunDir {
   std::string path_;
 };
 
+// Whether the ball-bar may be attached to the robot, kept across runs and restarts in
+// <data_dir>/bar.json: set when the operator confirms a connection, cleared only when the operator
+// confirms a detach. A missing file means never attached; a damaged one counts as attached (doubt
+// keeps the robot still until the operator confirms).
+struct BarAttachment {
+  bool maybe_attached = false;
+  int ball = 0, chuck = 0;  // 1-based, 0 when not known
+  double extension_mm = 0;
+  std::string run;  // the run that attached it
+  nlohmann::json toJson() const;
+};
+
 class RunStore {
  public:
   explicit RunStore(std::string data_dir);
@@ -50,7 +62,13 @@ class RunStore {
   // `skipped`, so a restarted daemon can say why an older result is served.
   std::optional<nlohmann::json> latestResult(std::vector<std::string>* skipped = nullptr) const;
 
+  // The bar's attachment (durably written before the caller goes on). `problem` gets why a
+  // damaged file was taken as "attached".
+  BarAttachment barAttachment(std::string* problem = nullptr) const;
+  void setBarAttachment(const BarAttachment& bar) const;
+
  private:
+  std::string data_dir_;
   std::string runs_dir_;
 };
 

@@ -69,4 +69,9 @@ nlohmann::json versionObject(const std::string& release);
 nlohmann::json errorObject(const std::string& message, const std::string& cmd = {});
 nlohmann::json ackObject(Cmd cmd, const std::string& message = {});
 
+// A BAR object's `kind`, as spelled on the wire (docs/protocol.md). Only a reading carries
+// `deflection_mm` (and `length_mm` with a bar attached).
+enum class BarKind { kReading, kOverRange, kNoProbe, kDeviceError };
+const char* barKindName(BarKind kind);
+
 }  // namespace robocal::proto

@@ -1,0 +1,64 @@
+// Watches the data points of a run for a connection that goes bad while a shell is measured (a
+// ball working loose in its socket, a bar knocked in its chuck). Each point brings its bar
+// deflection (the refined model's error there: the points are planned with it) and the spread of
+// the readings in its window. A shell whose recent points jump well above what the run has seen
+// so far is suspect: its last kPoints points are compared, as medians, with all earlier points.
+// Pure decision, no I/O: the run feeds it and pauses on a problem.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+namespace robocal::daemon {
+
+class ShellWatch {
+ public:
+  static constexpr std::size_t kPoints = 5;           // recent points judged together
+  static constexpr std::size_t kBaselinePoints = 10;  // earlier points needed to judge at all
+  static constexpr double kJump = 5.0;                // recent median over baseline median
+  static constexpr double kFloorDeflectionMm = 0.3, kFloorSpreadMm = 0.05;
+
+  void startShell() {
+    for (double v : shell_deflections_) baseline_deflections_.push_back(v);
+    for (double v : shell_spreads_) baseline_spreads_.push_back(v);
+    shell_deflections_.clear();
+    shell_spreads_.clear();
+  }
+
+  // "" while the shell looks like the rest of the run; otherwise what jumped and by how much.
+  std::string point(double deflection_mm, double spread_mm) {
+    shell_deflections_.push_back(std::abs(deflection_mm));
+    shell_spreads_.push_back(spread_mm);
+    if (shell_deflections_.size() < kPoints || baseline_deflections_.size() < kBaselinePoints)
+      return {};
+    const auto judge = [](const std::vector<double>& recent_all, const std::vector<double>& base,
+                          double floor_mm, const char* what) -> std::string {
+      const std::vector<double> recent(recent_all.end() - kPoints, recent_all.end());
+      const double now = median(recent), before = median(base);
+      if (now <= std::max(floor_mm, kJump * before)) return {};
+      char buf[200];
+      std::snprintf(buf, sizeof buf,
+                    "the bar %s of the last %zu points is %.3f mm (median), %.3f mm before", what,
+                    kPoints, now, before);
+      return buf;
+    };
+    std::string problem =
+        judge(shell_spreads_, baseline_spreads_, kFloorSpreadMm, "reading spread");
+    if (problem.empty())
+      problem = judge(shell_deflections_, baseline_deflections_, kFloorDeflectionMm, "deflection");
+    return problem;
+  }
+
+ private:
+  static double median(std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  }
+  std::vector<double> baseline_deflections_, baseline_spreads_;
+  std::vector<double> shell_deflections_, shell_spreads_;
+};
+
+}  // namespace robocal::daemon

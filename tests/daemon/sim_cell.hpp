@@ -1,0 +1,82 @@
+// Test helper: a whole simulated cell for the end-to-end tests: robocal-cellsim (a perturbed true
+// robot on ptys), robocald pointed at it with a small cell file, and an operator that answers
+// every prompt through cellsim's control socket, as a person at the cell would.
+#pragma once
+
+#include "../cli/cli_helpers.hpp"
+#include "../drivers/cellsim_process.hpp"
+#include "daemon_process.hpp"
+
+#include <robocal/proto/sim_operator.hpp>
+
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <fstream>
+#include <functional>
+#include <memory>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace robocal::test {
+
+struct Cell {
+  TempDir dir;
+  std::string truth_path;
+  std::unique_ptr<CellSimProcess> sim;
+  std::unique_ptr<DaemonProcess> daemon;
+
+  // The operator's answer to one prompt, in place of the right one when it returns true (a test
+  // of a mistake: a free bar, a wrong chuck, a bar left on).
+  std::function<bool(proto::Client&, const nlohmann::json& prompt)> mistake;
+
+  Cell(const std::vector<std::string>& connections, unsigned seed, bool centering = true,
+       double lon_step_deg = 60, double time_scale = 50) {
+    truth_path = dir / "truth.json";
+    const auto r = runRobocal("simulate --model " + kModel + " --seed " + std::to_string(seed) +
+                              " --connections B1C1 --points-per-shell 1 --out " + (dir / "x.csv") +
+                              " --truth-out " + truth_path);
+    REQUIRE(r.exit_code == 0);
+    sim = std::make_unique<CellSimProcess>(std::vector<std::string>{
+        "--model", truth_path, "--time-scale", std::to_string(time_scale), "--bar-mode", "streamed",
+        "--stream-hz", "100", "--bar-mm", "150", "--range-mm", "2.0", "--noise-mm", "0.03"});
+    std::ofstream(dir / "cell.json") << smallCell(connections, {0}, lon_step_deg).dump(1);
+    nlohmann::json drivers = drivers::toJson(sim->driversConfig());
+    drivers["bar"]["mode"] = "streamed";
+    drivers["val"]["poll_interval_s"] = 0.01;
+    daemon = std::make_unique<DaemonProcess>(nlohmann::json{{"model", kModel},
+                                                            {"cell", dir / "cell.json"},
+                                                            {"settle_s", 0.02},
+                                                            {"bar_window_s", 0.03},
+                                                            {"bar_soft_limit_mm", 1.0},
+                                                            {"bar_hard_limit_mm", 1.6},
+                                                            {"centering", centering},
+                                                            {"drivers", drivers}});
+    daemon->start();
+  }
+
+  // Acts as the operator until the run reaches one of `states` (returns it) or the time is up
+  // (returns ""). Every object read lands in `seen`.
+  std::string operate(proto::Client& c, const std::set<std::string>& states, double timeout_s,
+                      std::vector<nlohmann::json>* seen = nullptr) {
+    const auto deadline =
+        std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+    while (std::chrono::steady_clock::now() < deadline) {
+      auto o = c.read(0.2);
+      if (!o) continue;
+      if (seen && (*o)["class"] != "BAR") seen->push_back(*o);
+      const std::string cls = (*o)["class"];
+      if (cls == "PROMPT" && !(mistake && mistake(c, *o)))
+        proto::answerPrompt(
+            c, *o, [&](const std::string& cmd) { return sim->control(cmd); }, daemon->token(), 150);
+      if (cls == "STATE" && states.count((*o)["to"])) return (*o)["to"];
+    }
+    return "";
+  }
+
+  std::string runDir(const std::string& id) const { return daemon->dataDir() + "/runs/" + id; }
+};
+
+}  // namespace robocal::test

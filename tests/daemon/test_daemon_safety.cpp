@@ -1,0 +1,238 @@
+// The operator's mistakes against the real daemon and cellsim: a bar confirmed but not attached, a
+// ball in the wrong chuck, a bar left on the robot between runs. None may measure nonsense or move
+// the robot with the bar attached and unwatched.
+#include <catch2/catch.hpp>
+
+#include "sim_cell.hpp"
+
+#include <robocal/daemon/connection_check.hpp>
+#include <robocal/daemon/shell_watch.hpp>
+#include <robocal/daemon/time_left.hpp>
+#include <robocal/formats/samples_csv.hpp>
+
+#include <thread>
+
+using namespace robocal;
+using namespace robocal::test;
+using json = nlohmann::json;
+using Catch::Matchers::Contains;
+
+namespace {
+
+int countEvents(const std::string& run_dir, const std::string& name) {
+  std::ifstream in(run_dir + "/events.jsonl");
+  int n = 0;
+  for (std::string line; std::getline(in, line);) n += json::parse(line).value("event", "") == name;
+  return n;
+}
+
+// Confirms the pending prompt without doing what it asked (after `control` set up the cell).
+bool confirmAnyway(Cell& cell, proto::Client& c, const json& prompt, const std::string& control) {
+  REQUIRE_THAT(cell.sim->control(control), Contains("ok"));
+  c.send({{"cmd", "confirm"}, {"shell", prompt["shell"]}, {"token", cell.daemon->token()}});
+  return true;
+}
+
+}  // namespace
+
+TEST_CASE("the connection check passes a seated bar and fails a free one or a swapped chuck",
+          "[connection]") {
+  CHECK(daemon::connectionCheckProblem({{0.4, 0.41}, {-0.8, -0.79}}).empty());
+  CHECK(daemon::connectionCheckProblem({{-0.4, -0.33}, {0.8, 0.86}}).empty());
+  CHECK_THAT(daemon::connectionCheckProblem({{0.4, 0.01}, {-0.8, 0.02}}), Contains("free bar"));
+  // A bar in another chuck follows the ball only by the cosine between the two lines.
+  CHECK_THAT(daemon::connectionCheckProblem({{0.4, 0.15}, {-0.8, -0.3}}), Contains("chuck"));
+  CHECK_THAT(daemon::connectionCheckProblem({{0.4, -0.38}, {-0.8, 0.77}}), Contains("chuck"));
+}
+
+TEST_CASE("time left follows the plan until the measured pace takes over", "[eta]") {
+  daemon::TimeLeft t;
+  CHECK(t.seconds(600) == Approx(600));  // nothing measured: the plan's robot time
+  t.pointMeasured(3.0, 1.5);
+  t.pointMeasured(3.0, 1.5);
+  CHECK(t.seconds(600) == Approx(600));  // two points say little yet
+  t.pointMeasured(3.0, 1.5);
+  CHECK(t.seconds(600) == Approx(300));  // twice as fast as planned
+  CHECK(t.seconds(-5) == 0);
+}
+
+TEST_CASE("a bar confirmed but not attached pauses the run before any sample",
+          "[e2e][connection]") {
+  Cell cell({"B1C1", "B2C2", "B3C3"}, 21);
+  cell.mistake = [&](proto::Client& c, const json& p) {
+    return p["action"] == "connect" && confirmAnyway(cell, c, p, "connect none");
+  };
+  auto c = cell.daemon->client();
+  c->send({{"cmd", "watch"}, {"enable", true}});
+  REQUIRE(c->request({{"cmd", "start"}, {"token", cell.daemon->token()}}, 30, "ACK")["class"] ==
+          "ACK");
+  std::vector<json> seen;
+  REQUIRE(cell.operate(*c, {"paused", "done", "error"}, 120, &seen) == "paused");
+  const json st = c->request({{"cmd", "status"}}, 10, "STATUS");
+  INFO(st.dump());
+  CHECK_THAT(st["reason"].get<std::string>(), Contains("connection check on shell 1"));
+  CHECK_THAT(st["reason"].get<std::string>(), Contains("free bar"));
+  CHECK(cell.sim->status("moving") == "0");
+  CHECK(loadSamplesFile(cell.runDir(st["run"]) + "/samples.csv").empty());
+  CHECK(countEvents(cell.runDir(st["run"]), "connection_check") == 1);
+  // Put right and resumed, the same run measures to the end: the check passes a seated bar.
+  cell.mistake = nullptr;
+  REQUIRE(c->request({{"cmd", "resume"}, {"token", cell.daemon->token()}}, 30, "ACK")["class"] ==
+          "ACK");
+  REQUIRE(cell.operate(*c, {"done", "paused", "error"}, 240) == "done");
+  CHECK(countEvents(cell.runDir(st["run"]), "connection_check") == 4);
+  CHECK(cell.sim->status("broken_events") == "0");
+}
+
+TEST_CASE("a ball seated in the wrong chuck pauses the run", "[e2e][connection]") {
+  Cell cell({"B1C1", "B2C2"}, 22);
+  cell.mistake = [&](proto::Client& c, const json& p) {
+    // Asked for chuck 1, the operator seats a bar of just the right length in chuck 2.
+    return p["action"] == "connect" && p["chuck"] == 1 &&
+           confirmAnyway(cell, c, p, "connect B1C2 bar_mm=here");
+  };
+  auto c = cell.daemon->client();
+  c->send({{"cmd", "watch"}, {"enable", true}});
+  REQUIRE(c->request({{"cmd", "start"}, {"token", cell.daemon->token()}}, 30, "ACK")["class"] ==
+          "ACK");
+  REQUIRE(cell.operate(*c, {"paused", "done", "error"}, 120) == "paused");
+  const json st = c->request({{"cmd", "status"}}, 10, "STATUS");
+  INFO(st.dump());
+  CHECK_THAT(st["reason"].get<std::string>(), Contains("connection check on shell 1"));
+  CHECK_THAT(st["reason"].get<std::string>(), Contains("chuck"));
+  CHECK(loadSamplesFile(cell.runDir(st["run"]) + "/samples.csv").empty());
+  CHECK(cell.sim->status("broken_events") == "0");
+}
+
+TEST_CASE("a bar left attached by an aborted run is detached before the next run moves",
+          "[e2e][safety]") {
+  Cell cell({"B1C1", "B2C2"}, 23);
+  auto c = cell.daemon->client();
+  c->send({{"cmd", "watch"}, {"enable", true}});
+  REQUIRE(c->request({{"cmd", "start"}, {"token", cell.daemon->token()}}, 30, "ACK")["class"] ==
+          "ACK");
+  REQUIRE(cell.operate(*c, {"measuring"}, 60) == "measuring");
+  const json abort = c->request({{"cmd", "abort"}, {"token", cell.daemon->token()}}, 10, "ACK");
+  CHECK_THAT(abort.value("message", ""), Contains("aborted"));
+  REQUIRE(waitFor(*c, "STATE", 30, "aborted"));
+  // The bar stays on (the operator walked away); robocald restarts and knows it.
+  c.reset();
+  cell.daemon->stop();
+  cell.daemon->start();
+  c = cell.daemon->client();
+  CHECK(c->request({{"cmd", "status"}}, 10, "STATUS")["bar_attached"] == true);
+  c->send({{"cmd", "watch"}, {"enable", true}});
+  REQUIRE(c->request({{"cmd", "start"}, {"token", cell.daemon->token()}}, 30, "ACK")["class"] ==
+          "ACK");
+  // The first thing the new run does is ask for the detach: nothing moves before it.
+  std::vector<json> seen;
+  const auto prompt = waitFor(*c, "PROMPT", 30, {}, &seen);
+  REQUIRE(prompt);
+  CHECK((*prompt)["action"] == "detach");
+  CHECK((*prompt)["ball"] == 1);
+  for (const json& o : seen) CHECK_FALSE((o["class"] == "STATE" && o["to"] == "moving"));
+  CHECK(cell.sim->status("moving") == "0");
+  proto::answerPrompt(
+      *c, *prompt, [&](const std::string& cmd) { return cell.sim->control(cmd); },
+      cell.daemon->token(), 150);
+  REQUIRE(cell.operate(*c, {"done", "paused", "error"}, 240) == "done");
+  // It ended with the bar confirmed off: the daemon says so, and a third run starts by moving.
+  CHECK(c->request({{"cmd", "status"}}, 10, "STATUS")["bar_attached"] == false);
+  CHECK(cell.sim->status("broken_events") == "0");
+  seen.clear();
+  REQUIRE(c->request({{"cmd", "start"}, {"token", cell.daemon->token()}}, 30, "ACK")["class"] ==
+          "ACK");
+  const auto first_prompt = waitFor(*c, "PROMPT", 30, {}, &seen);
+  REQUIRE(first_prompt);
+  CHECK((*first_prompt)["action"] == "connect");
+  REQUIRE(c->request({{"cmd", "abort"}, {"token", cell.daemon->token()}}, 10, "ACK")["class"] ==
+          "ACK");
+}
+
+TEST_CASE("a bar still on the robot after a detach confirm stops the robot", "[e2e][safety]") {
+  // Slower motion, so the change shows long before the bar's range is used up.
+  Cell cell({"B1C1", "B2C2"}, 24, true, 60, 5);
+  cell.mistake = [&](proto::Client& c, const json& p) {
+    if (p["action"] != "detach") return false;
+    c.send({{"cmd", "confirm"}, {"shell", p["shell"]}, {"token", cell.daemon->token()}});
+    return true;  // confirmed, but the bar stays on
+  };
+  auto c = cell.daemon->client();
+  c->send({{"cmd", "watch"}, {"enable", true}});
+  REQUIRE(c->request({{"cmd", "start"}, {"token", cell.daemon->token()}}, 30, "ACK")["class"] ==
+          "ACK");
+  REQUIRE(cell.operate(*c, {"paused", "done", "error"}, 240) == "paused");
+  const json st = c->request({{"cmd", "status"}}, 10, "STATUS");
+  INFO(st.dump());
+  CHECK_THAT(st["reason"].get<std::string>(), Contains("believed detached"));
+  CHECK(st["bar_attached"] == true);
+  CHECK(cell.sim->status("moving") == "0");
+}
+
+TEST_CASE("start is refused with the port's error when a device is missing", "[e2e]") {
+  Cell cell({"B1C1"}, 25);
+  cell.sim.reset();  // both ports are gone
+  auto c = cell.daemon->client();
+  // The daemon notices at its next poll of the ports (every 2 s).
+  json reply;
+  for (int i = 0; i < 50; ++i) {
+    reply = c->request({{"cmd", "start"}, {"token", cell.daemon->token()}}, 30, "ACK");
+    if (reply["class"] == "ERROR") break;
+    c->request({{"cmd", "abort"}, {"token", cell.daemon->token()}}, 10, "ACK");
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  }
+  INFO(reply.dump());
+  REQUIRE(reply["class"] == "ERROR");
+  CHECK_THAT(reply["message"].get<std::string>(), Contains("not connected"));
+  const json runs = c->request({{"cmd", "runs"}}, 10, "RUNS");
+  CHECK(runs["runs"].empty());
+}
+
+TEST_CASE("a shell whose points jump above the run's pauses it", "[shellwatch]") {
+  daemon::ShellWatch w;
+  w.startShell();
+  for (int i = 0; i < 12; ++i) CHECK(w.point(i % 2 ? 0.05 : -0.04, 0.02).empty());
+  w.startShell();
+  for (int i = 0; i < 4; ++i) CHECK(w.point(0.06, 0.03).empty());  // like the rest of the run
+  for (int i = 0; i < 2; ++i) CHECK(w.point(0.05, 0.4).empty());   // two unsteady points: wait
+  std::string problem;
+  for (int i = 0; i < 3 && problem.empty(); ++i) problem = w.point(0.05, 0.4);
+  CHECK_THAT(problem, Contains("reading spread"));
+  // Deflections that stay large are the other sign of a bad seat.
+  daemon::ShellWatch d;
+  d.startShell();
+  for (int i = 0; i < 12; ++i) d.point(0.05, 0.02);
+  d.startShell();
+  for (int i = 0; i < 4; ++i) CHECK(d.point(-0.7, 0.02).empty());
+  CHECK_THAT(d.point(-0.7, 0.02), Contains("deflection"));
+  // The first shell has nothing to be compared with.
+  daemon::ShellWatch first;
+  first.startShell();
+  for (int i = 0; i < 12; ++i) CHECK(first.point(0.9, 0.5).empty());
+}
+
+TEST_CASE("a ball working loose mid-shell pauses the run", "[e2e][shellwatch]") {
+  Cell cell({"B1C1", "B2C2", "B3C3"}, 27, true, 45);
+  auto c = cell.daemon->client();
+  c->send({{"cmd", "watch"}, {"enable", true}});
+  REQUIRE(c->request({{"cmd", "start"}, {"token", cell.daemon->token()}}, 30, "ACK")["class"] ==
+          "ACK");
+  // Into shell 2, a few points measured: then the ball works loose.
+  std::vector<json> seen;
+  bool in_shell_2 = false;
+  for (int i = 0; i < 600 && !in_shell_2; ++i) {
+    cell.operate(*c, {}, 0.2, &seen);
+    for (const json& o : seen)
+      if (o["class"] == "SAMPLE" && o["shell"] == 2) in_shell_2 = true;
+  }
+  REQUIRE(in_shell_2);
+  REQUIRE_THAT(cell.sim->control("fault loose"), Contains("ok"));
+  REQUIRE(cell.operate(*c, {"paused", "done", "error"}, 120) == "paused");
+  const json st = c->request({{"cmd", "status"}}, 10, "STATUS");
+  INFO(st.dump());
+  CHECK_THAT(st["reason"].get<std::string>(), Contains("tight in its socket"));
+  REQUIRE_THAT(cell.sim->control("fault loose off"), Contains("ok"));
+  REQUIRE(c->request({{"cmd", "resume"}, {"token", cell.daemon->token()}}, 30, "ACK")["class"] ==
+          "ACK");
+  CHECK(cell.operate(*c, {"done", "paused", "error"}, 240) == "done");
+}
