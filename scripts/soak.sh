@@ -334,6 +334,10 @@ by_kind=$(cut -f2 "$out/faults.tsv" | sort | uniq -c | awk '{ printf "%s%s %s", 
 verdict "faults in the event log" $((unseen == 0)) "$faults_total injected ($by_kind); \
 $((checked - unseen)) of $checked observable ones seen (bar_drop is not observable); $resumes \
 resumes; $(cat "$out/churn.count" 2>/dev/null || echo 0) churned clients"
+# The bar never left its range: cellsim counts each time it would have broken.
+broken=$(cellsim status | grep -o 'broken_events=[0-9]*' | cut -d= -f2)
+verdict "bar never over its range" $((${broken:-1} == 0)) "cellsim: ${broken:-?} bar-would-have-broken \
+events ($(cellsim events | cut -c1-200))"
 echo "pause reasons:" | tee -a "$out/soak.log"
 jq -r 'select(.event == "paused") | .reason' "$out/evidence.jsonl" | sed 's/[0-9.]\+/N/g' |
   sort | uniq -c | sort -rn | tee -a "$out/soak.log"
