@@ -140,6 +140,14 @@ std::string resultText(const json& r) {
   if (r.contains("predicted_ball_error_rms_mm"))
     out << "  predicted ball position error: RMS "
         << format("%.4f", r["predicted_ball_error_rms_mm"].get<double>()) << " mm\n";
+  if (r.contains("worst_shells") && !r["worst_shells"].empty()) {
+    out << "  worst shells by RMS:";
+    for (const json& shell : r["worst_shells"]) out << " " << shell.dump();
+    out << " (robocal solve prints the table)\n";
+  }
+  if (r.contains("problems"))
+    for (const json& p : r["problems"])
+      out << "  NOT USABLE AS IS: " << (p.is_string() ? p.get<std::string>() : p.dump()) << "\n";
   if (r.contains("outliers") && !r["outliers"].empty())
     out << "  outliers: " << r["outliers"].size() << "\n";
   out << "  calibrated model: " << r.value("calibrated_file", "?") << "\n";
