@@ -88,6 +88,13 @@ class Daemon {
           });
         }) {}
 
+  // A plan being made when the daemon stops is awaited: its thread uses the daemon's members.
+  ~Daemon() {
+    if (plan_worker_.joinable()) plan_worker_.join();
+  }
+  Daemon(const Daemon&) = delete;
+  Daemon& operator=(const Daemon&) = delete;
+
   unsigned short listen() {
     return hub_.listen(config_.listen_address, static_cast<unsigned short>(config_.port));
   }
@@ -177,9 +184,10 @@ class Daemon {
       return;
     }
     planning_ = true;
+    if (plan_worker_.joinable()) plan_worker_.join();  // the last one has posted its answer
     const std::string path =
         !plan_path.empty() ? plan_path : (cell_path.empty() ? config_.plan : "");
-    std::thread([this, id, path, cell_path, then_start] {
+    plan_worker_ = std::thread([this, id, path, cell_path, then_start] {
       std::optional<Plan> plan;
       std::string source, error;
       json violation_list = json::array();
@@ -223,7 +231,7 @@ class Daemon {
                             : proto::errorObject(err, "start"));
         }
       });
-    }).detach();
+    });
   }
 
   asio::io_context& io_;
@@ -236,6 +244,7 @@ class Daemon {
   std::optional<Plan> plan_;
   std::string plan_source_;
   bool planning_ = false;
+  std::thread plan_worker_;  // makes or loads a plan off the event loop; joined, never detached
 };
 
 void setupLogging(const DaemonConfig& config) {

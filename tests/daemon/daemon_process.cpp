@@ -77,14 +77,19 @@ void DaemonProcess::kill9() {
   pid_ = -1;
 }
 
-void DaemonProcess::stop() {
-  if (pid_ <= 0) return;
+int DaemonProcess::stop() {
+  if (pid_ <= 0) return -1;
   ::kill(pid_, SIGTERM);
   int status = 0;
-  for (int i = 0; i < 500 && ::waitpid(pid_, &status, WNOHANG) == 0; ++i)
+  pid_t waited = 0;
+  for (int i = 0; i < 500 && (waited = ::waitpid(pid_, &status, WNOHANG)) == 0; ++i)
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  if (running()) kill9();
+  if (waited == 0) {
+    kill9();
+    return -1;
+  }
   pid_ = -1;
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
 std::string DaemonProcess::token() const {

@@ -22,7 +22,7 @@ class DaemonProcess {
 
   void start();  // runs robocald and waits until it listens
   void kill9();  // SIGKILL, as a crash or power loss would
-  void stop();   // SIGTERM and wait
+  int stop();    // SIGTERM and wait: the exit code (128 + signal when killed by one, -1 if hung)
   bool running();
   unsigned short port() const { return port_; }
   const std::string& dir() const { return dir_; }

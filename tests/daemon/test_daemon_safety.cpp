@@ -236,3 +236,21 @@ TEST_CASE("a ball working loose mid-shell pauses the run", "[e2e][shellwatch]") 
           "ACK");
   CHECK(cell.operate(*c, {"done", "paused", "error"}, 240) == "done");
 }
+
+TEST_CASE("SIGTERM while a plan is being made stops the daemon cleanly", "[e2e][threads]") {
+  Cell cell({"B1C1", "B2C2", "B3C3"}, 28, true, 15);  // a fine grid: planning takes a while
+  for (int round = 0; round < 2; ++round) {           // and again after a restart
+    auto c = cell.daemon->client();
+    c->send({{"cmd", "plan"}, {"token", cell.daemon->token()}});
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    c.reset();
+    CHECK(cell.daemon->stop() == 0);
+    cell.daemon->start();
+  }
+  // Planning still works after it all, and answers with the plan's rank.
+  const json plan = cell.daemon->client()->request(
+      {{"cmd", "plan"}, {"token", cell.daemon->token()}}, 120, "PLAN");
+  INFO(plan.dump());
+  REQUIRE(plan["class"] == "PLAN");
+  CHECK(plan["rank"].get<int>() > 0);
+}
