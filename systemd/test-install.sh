@@ -67,9 +67,10 @@ check_tree() {
       fail "not installed as shipped: $d$sysconf/robocald/$name"
   done
   # The whole documentation, in the repository's layout, so `docs/NAME.md` references resolve.
-  for f in "$source_dir"/docs/*; do
-    cmp -s "$f" "$docdir/docs/${f##*/}" || fail "documentation not installed: $docdir/docs/${f##*/}"
-  done
+  while IFS= read -r -d '' f; do
+    rel=${f#"$source_dir"/docs/}
+    cmp -s "$f" "$docdir/docs/$rel" || fail "documentation not installed: $docdir/docs/$rel"
+  done < <(find "$source_dir/docs" -type f -print0)
   # shellcheck disable=SC2016 # the backquotes are the docs' own
   grep -ho '`docs/[A-Za-z0-9_.-]*\.md`' "$docdir/README.md" "$docdir"/docs/*.md | sort -u |
     while read -r ref; do
