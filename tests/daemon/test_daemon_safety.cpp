@@ -43,6 +43,9 @@ TEST_CASE("the connection check passes a seated bar and fails a free one or a sw
   // A bar in another chuck follows the ball only by the cosine between the two lines.
   CHECK_THAT(daemon::connectionCheckProblem({{0.4, 0.15}, {-0.8, -0.3}}), Contains("chuck"));
   CHECK_THAT(daemon::connectionCheckProblem({{0.4, -0.38}, {-0.8, 0.77}}), Contains("chuck"));
+  // A chuck whose line is 45 degrees off: 0.7 of each step.
+  CHECK_THAT(daemon::connectionCheckProblem({{0.4, 0.283}, {-0.8, -0.566}}), Contains("chuck"));
+  CHECK_THAT(daemon::connectionCheckProblem({{-0.4, -0.36}, {0.8, 0.566}}), Contains("chuck"));
 }
 
 TEST_CASE("time left follows the plan until the measured pace takes over", "[eta]") {
