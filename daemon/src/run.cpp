@@ -770,8 +770,6 @@ struct RunController::Impl {
     }
     updateProgress(static_cast<int>(samples.size()), total, timeLeftSeconds());
 
-    // A bar left attached by an earlier run, a pause or a crash is detached before anything moves.
-    bool bar_maybe_attached = barMaybeAttached();
     ShellWatch shell_watch;  // a connection going bad mid-shell
     // Re-plan files are numbered on from those of the run's earlier sessions (before a resume).
     int replans = 0;
@@ -806,9 +804,10 @@ struct RunController::Impl {
         connection_name = conn;
       }
 
-      if (bar_maybe_attached) {
+      // A bar left attached (by the last shell, an earlier run, a pause or a crash) is detached
+      // before anything moves.
+      if (barMaybeAttached()) {
         waitDetach(dir, planned.shell, "Detach the ball-bar from the robot, then confirm.");
-        bar_maybe_attached = false;
       }
       setState("moving", "to shell " + std::to_string(planned.shell) + "'s connect pose");
       JointsDeg q = move(planned.connect.joints_deg, false, false);
@@ -833,7 +832,6 @@ struct RunController::Impl {
             q = move(correction(refined ? *refined : nominal, cell_config, planned, q, -mm), false,
                      false);
           });
-      bar_maybe_attached = true;
       setAttachment({true, c.ball_index + 1, c.chuck_index + 1, planned.extension_mm, dir.id()});
       bar_offset_mm = cell_config.bar.nominal_length_mm + planned.extension_mm;
       // The bar must read, and read near zero, before anything moves with it attached.
@@ -1002,7 +1000,7 @@ struct RunController::Impl {
       }
     }
     // The run ends with the bar off the robot: the next run must not move with it attached.
-    if (bar_maybe_attached)
+    if (barMaybeAttached())
       waitDetach(dir, 0, "The run is complete: detach the ball-bar from the robot, then confirm.");
   }
 
