@@ -295,9 +295,16 @@ bool ValReplyCollector::feed(std::string_view bytes) {
   std::vector<std::string> got;
   splitter_.feed(bytes, got);
   for (const auto& l : got) {
-    if (complete_) break;
+    if (complete_) {
+      rest_ += l + "\n";
+      continue;
+    }
     ++line_endings_;
     line(l);
+  }
+  if (complete_ && !got.empty()) {
+    rest_ += splitter_.pending();
+    splitter_.clear();
   }
   // A prompt without a line ending ends the reply once a line has ended since the command was
   // sent: before that it may be the prompt the controller echoes in front of the command.

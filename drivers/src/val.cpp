@@ -201,7 +201,11 @@ void ValController::received(std::string_view bytes) {
     unsolicited(bytes);
     return;
   }
-  if (current_->collector.feed(bytes)) finish(nullptr);
+  if (!current_->collector.feed(bytes)) return;
+  // What followed the reply in the same read was printed after it: an error there (an E-stop)
+  // is reported with this reply rather than lost.
+  unsolicited(current_->collector.rest());
+  finish(nullptr);
 }
 
 void ValController::unsolicited(std::string_view bytes) {

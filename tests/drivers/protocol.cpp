@@ -105,6 +105,26 @@ TEST_CASE("Reply collector: echo, prompt, errors", "[drivers][protocol]") {
   CHECK(ValDialect::formatError("Arm power off") == "*Arm power off*");
 }
 
+TEST_CASE("Reply collector: what follows the reply in the same read is kept",
+          "[drivers][protocol]") {
+  // Found by CI: an E-stop report that arrived in the same read as a WHERE reply's prompt was
+  // dropped, and the driver saw only an arm that had stopped short.
+  const ValDialect d{ValConfig{}};
+  ValReplyCollector c(d, "WHERE");
+  CHECK(c.feed("WHERE\r\nJ1\r\n1.0\r\n.\r\n*Arm power off*\r\n."));
+  CHECK(c.errors().empty());
+  CHECK(c.lines() == std::vector<std::string>{"J1", "1.0"});
+  LineSplitter rest;
+  std::vector<std::string> lines;
+  rest.feed(c.rest(), lines);
+  CHECK(lines == std::vector<std::string>{"*Arm power off*"});
+  CHECK(rest.pending() == ".");
+
+  ValReplyCollector quiet(d, "WHERE");
+  CHECK(quiet.feed("WHERE\r\nJ1\r\n1.0\r\n."));
+  CHECK(quiet.rest().empty());
+}
+
 TEST_CASE("Bar lines: the simulator's formats parse back", "[drivers][protocol]") {
   for (const std::string format : {"mm_suffix", "mitutoyo", "gn"}) {
     BarConfig c;

@@ -108,6 +108,9 @@ class ValReplyCollector {
   const std::vector<std::string>& errors() const { return errors_; }  // error messages
   const std::string& raw() const { return raw_; }                     // every byte received
   bool echoSeen() const { return echo_seen_; }
+  // Bytes that came after the end of the reply in the same read (an unsolicited message the
+  // controller printed next, such as an E-stop report): the caller must not drop them.
+  const std::string& rest() const { return rest_; }
 
  private:
   void line(const std::string& text);
@@ -115,7 +118,7 @@ class ValReplyCollector {
   std::string command_;
   LineSplitter splitter_;
   std::vector<std::string> lines_, errors_;
-  std::string raw_;
+  std::string raw_, rest_;
   bool complete_ = false, echo_seen_ = false;
   int line_endings_ = 0;
 };
