@@ -163,6 +163,38 @@ const char* barKindName(BarKind kind) {
   return "device_error";
 }
 
+namespace {
+constexpr std::array<std::pair<RunState, const char*>, 11> kRunStates = {
+    {{RunState::kIdle, "idle"},
+     {RunState::kChecking, "checking"},
+     {RunState::kMoving, "moving"},
+     {RunState::kAwaitingConfirm, "awaiting_confirm"},
+     {RunState::kMeasuring, "measuring"},
+     {RunState::kPaused, "paused"},
+     {RunState::kInterrupted, "interrupted"},
+     {RunState::kSolving, "solving"},
+     {RunState::kDone, "done"},
+     {RunState::kAborted, "aborted"},
+     {RunState::kError, "error"}}};
+}  // namespace
+
+const char* runStateName(RunState state) {
+  for (const auto& [s, name] : kRunStates)
+    if (s == state) return name;
+  return "error";
+}
+
+std::optional<RunState> parseRunState(std::string_view name) {
+  for (const auto& [s, n] : kRunStates)
+    if (name == n) return s;
+  return std::nullopt;
+}
+
+bool isBusy(RunState state) {
+  return state == RunState::kChecking || state == RunState::kMoving ||
+         state == RunState::kAwaitingConfirm || state == RunState::kMeasuring;
+}
+
 json ackObject(Cmd cmd, const std::string& message) {
   json a = {{"class", "ACK"}, {"cmd", cmdName(cmd)}};
   if (!message.empty()) a["message"] = message;

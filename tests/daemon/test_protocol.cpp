@@ -47,3 +47,19 @@ TEST_CASE("server objects are one line with a class") {
   CHECK_THAT(line, Contains("\"class\":\"ERROR\""));
   CHECK(versionObject("1.2.3")["proto_major"] == kProtoMajor);
 }
+
+TEST_CASE("Run states: every wire name parses back, and only a run that owns the robot is busy",
+          "[proto]") {
+  using robocal::proto::RunState;
+  int busy = 0;
+  for (int i = 0; i <= static_cast<int>(RunState::kError); ++i) {
+    const auto state = static_cast<RunState>(i);
+    const std::string name = robocal::proto::runStateName(state);
+    INFO(name);
+    CHECK(robocal::proto::parseRunState(name) == state);
+    busy += robocal::proto::isBusy(state) ? 1 : 0;
+  }
+  CHECK(busy == 4);
+  CHECK_FALSE(robocal::proto::isBusy(RunState::kPaused));
+  CHECK_FALSE(robocal::proto::parseRunState("over range"));
+}

@@ -74,4 +74,24 @@ nlohmann::json ackObject(Cmd cmd, const std::string& message = {});
 enum class BarKind { kReading, kOverRange, kNoProbe, kDeviceError };
 const char* barKindName(BarKind kind);
 
+// The daemon's run state (STATUS `state`, STATE `from`/`to`), spelled once here.
+enum class RunState {
+  kIdle,
+  kChecking,         // planning or checking a plan before a run
+  kMoving,           // the robot is moving (to a connect pose, between points)
+  kAwaitingConfirm,  // a PROMPT waits for the operator; the robot is still
+  kMeasuring,        // dwelling and reading the bar at points
+  kPaused,           // stopped by a fault or the operator; resume continues
+  kInterrupted,      // the daemon stopped during a run; resume continues
+  kSolving,          // fitting a completed shell set
+  kDone,
+  kAborted,
+  kError
+};
+const char* runStateName(RunState state);
+// The state with this wire name; nullopt for an unknown name.
+std::optional<RunState> parseRunState(std::string_view name);
+// A run owns the robot in these states: a new start or resume is refused.
+bool isBusy(RunState state);
+
 }  // namespace robocal::proto
