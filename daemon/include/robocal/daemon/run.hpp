@@ -6,6 +6,7 @@
 // through thread-safe calls; events go back through `publish`.
 #pragma once
 
+#include <robocal/daemon/cell_io.hpp>
 #include <robocal/daemon/config.hpp>
 #include <robocal/daemon/run_store.hpp>
 #include <robocal/kinematics/model.hpp>
@@ -13,14 +14,10 @@
 
 #include <nlohmann/json.hpp>
 
-#include <atomic>
-#include <condition_variable>
 #include <functional>
 #include <memory>
-#include <mutex>
 #include <optional>
 #include <string>
-#include <thread>
 
 namespace robocal::daemon {
 
@@ -29,8 +26,9 @@ class RunController {
   // Called from the run and solver threads; must be thread-safe (robocald posts to its loop).
   using Publish = std::function<void(nlohmann::json object, bool droppable)>;
 
-  RunController(DaemonConfig config, Model nominal, std::optional<CellConfig> cell,
-                Publish publish);
+  // `cell_io`: the cell to run on; the drivers of `config` when null (tests give a scripted one).
+  RunController(DaemonConfig config, Model nominal, std::optional<CellConfig> cell, Publish publish,
+                std::unique_ptr<CellIo> cell_io = nullptr);
   ~RunController();
   RunController(const RunController&) = delete;
   RunController& operator=(const RunController&) = delete;

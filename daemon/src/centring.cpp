@@ -1,0 +1,73 @@
+#include "centring.hpp"
+
+#include <robocal/kinematics/kinematics.hpp>
+#include <robocal/planner/check.hpp>
+#include <robocal/solver/calibrate.hpp>
+
+#include <Eigen/LU>
+
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+namespace robocal::daemon {
+namespace {
+constexpr double kRadPerDeg = std::numbers::pi / 180.0;
+}  // namespace
+
+Centring::Centring(const Model& nominal, const CellConfig& cell, bool enabled,
+                   std::vector<Sample> samples)
+    : nominal_(nominal), cell_(cell), enabled_(enabled), samples_(std::move(samples)) {
+  if (enabled_ && !samples_.empty()) refit();
+}
+
+void Centring::refit() {
+  const ModelUncertainty& u = cell_.uncertainty;
+  ParamVector sigma;
+  for (int i = 0; i < kParamCount; ++i) {
+    const bool joint = (i % (kLinkParamCount + kJointParamCount)) >= kLinkParamCount;
+    switch (paramKind(i)) {
+      case ParamKind::kTranslation:
+        sigma[i] = u.translation_sigma_mm;
+        break;
+      case ParamKind::kAngle:
+        sigma[i] = (joint ? u.joint_offset_sigma_deg : u.link_angle_sigma_deg) * kRadPerDeg;
+        break;
+      case ParamKind::kGain:
+        sigma[i] = u.gain_sigma;
+        break;
+    }
+  }
+  SolveOptions opt;
+  opt.prior_sigma = 3.0 * sigma;  // generous: the prior only steadies what data cannot see
+  opt.max_iterations = 20;
+  refined_ = withParams(nominal_, solveCalibration(nominal_, samples_, opt).params);
+  refined_at_ = samples_.size();
+}
+
+std::optional<JointsDeg> correction(const Model& model, const CellConfig& cell,
+                                    const ShellPlan& shell, const JointsDeg& q,
+                                    double deflection_mm, std::string& problem) {
+  const Connection& c = shell.connection;
+  const Kinematics kin(model);
+  const Eigen::Vector3d ball = kin.ballPosition(q, model.balls_mm[c.ball_index]);
+  const Eigen::Vector3d u = (ball - model.chucks_mm[c.chuck_index]).normalized();
+  const Eigen::Matrix<double, 3, 6> jac =
+      kin.jointJacobian(q, model.balls_mm[c.ball_index]).topRows<3>();
+  const Eigen::Vector3d move = -deflection_mm * u;
+  const Eigen::Matrix<double, 6, 1> dq =
+      jac.transpose() * (jac * jac.transpose()).partialPivLu().solve(move);
+  const JointsDeg target = q + dq / kRadPerDeg;
+  constexpr double kMaxTurnDegPerMm = 2.0;
+  const double max_turn_deg = (dq / kRadPerDeg).cwiseAbs().maxCoeff();
+  if (!target.allFinite() ||
+      max_turn_deg > kMaxTurnDegPerMm * std::max(1.0, std::abs(deflection_mm)))
+    problem = "it would turn a joint by " + std::to_string(max_turn_deg) + " deg";
+  else
+    problem = ShellPlanner(model, cell)
+                  .poseProblem(c, shell.radius_mm, target, std::numeric_limits<double>::infinity());
+  if (!problem.empty()) return std::nullopt;
+  return target;
+}
+
+}  // namespace robocal::daemon

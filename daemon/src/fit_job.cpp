@@ -1,0 +1,100 @@
+#include "fit_job.hpp"
+
+#include <robocal/formats/model_json.hpp>
+#include <robocal/formats/report.hpp>
+#include <robocal/formats/samples_csv.hpp>
+#include <robocal/solver/assessment.hpp>
+
+#include <spdlog/spdlog.h>
+
+#include <cmath>
+
+namespace robocal::daemon {
+namespace {
+
+using json = nlohmann::json;
+
+// The previous set's calibrated model of this run, to predict the new set before it is fitted.
+std::optional<Model> previousSetModel(const json& last_result, const std::string& run,
+                                      int& previous_set) {
+  if (!last_result.contains("calibrated_file") || last_result.value("run", "") != run)
+    return std::nullopt;
+  try {
+    previous_set = last_result.value("set", 0);
+    return loadModelFile(last_result["calibrated_file"].get<std::string>());
+  } catch (const std::exception& e) {  // the fit goes on, without the prediction
+    spdlog::warn("the previous set's model cannot be read: {}", e.what());
+    return std::nullopt;
+  }
+}
+
+}  // namespace
+
+void FitJob::launch(RunDir dir, std::vector<Sample> samples, double set_extension_mm,
+                    int set_index) {
+  wait();
+  int previous_set = 0;
+  const json last = shared_.with([](const RunData& d) { return d.last_result; });
+  std::optional<Model> previous = previousSetModel(last, dir.id(), previous_set);
+  // The samples file, read as robocal solve reads it (here, while nothing appends to it): the
+  // RESULT is then `robocal solve --json` of that file plus the run's keys, by construction, and
+  // outliers are named by line.
+  std::vector<Sample> fitted;
+  try {
+    fitted = loadSamplesFile(dir.file("samples.csv"));
+  } catch (const std::exception& e) {
+    spdlog::warn("the samples file cannot be read back for the fit: {}", e.what());
+  }
+  if (fitted.size() != samples.size()) {
+    spdlog::warn("the samples file holds {} samples, the run {}: fitting the run's", fitted.size(),
+                 samples.size());
+    fitted = std::move(samples);
+  }
+  running_ = std::async(std::launch::async, [this, dir, fitted = std::move(fitted),
+                                             set_extension_mm, set_index, previous,
+                                             previous_set]() mutable {
+    try {
+      AssessOptions options;  // robocal solve's defaults
+      if (previous) {
+        HeldOutSamples held{{},
+                            previous,
+                            "set " + std::to_string(set_index) + " predicted by the set-" +
+                                std::to_string(previous_set) + " fit"};
+        for (const Sample& s : fitted)
+          if (std::abs(s.extension_mm - set_extension_mm) < 1e-6) held.samples.push_back(s);
+        if (!held.samples.empty()) options.validation = std::move(held);
+      }
+      const FitAssessment fit = assessFit(nominal_, std::move(fitted), options);
+      const std::string name = "set" + std::to_string(set_index);
+      const std::string model_file = dir.file("calibrated-" + name + ".json");
+      const Model calibrated = calibratedModel(fit, {dir.id(), {dir.file("samples.csv")}});
+      saveModelFile(model_file, calibrated);
+      writeReport(dir.file("report-" + name), fit, calibrated);
+      json result = fitSummaryJson(fit);
+      result["run"] = dir.id();
+      result["set"] = set_index;
+      result["extension_mm"] = set_extension_mm;
+      result["calibrated_file"] = model_file;
+      result["report_dir"] = dir.file("report-" + name);
+      result["samples_file"] = dir.file("samples.csv");
+      if (fit.validation)  // kept for clients of protocol 1.0; validation_* say the same
+        result["prediction"] = {{"n", fit.validation->stats.count},
+                                {"rms_mm", fit.validation->stats.rms_mm},
+                                {"max_abs_mm", fit.validation->stats.max_abs_mm}};
+      dir.writeJson("result-" + name + ".json", result);
+      dir.logEvent({{"event", "result"},
+                    {"set", set_index},
+                    {"rms_mm", fit.fit.after.rms_mm},
+                    {"problems", fit.problems}});
+      for (const std::string& problem : fit.problems)
+        spdlog::warn("set {} fit not usable as a calibration: {}", set_index, problem);
+      shared_.with([&](RunData& d) { d.last_result = result; });
+      publish_(result, false);
+    } catch (const std::exception& e) {
+      spdlog::error("solver failed: {}", e.what());
+      publish_({{"class", "ERROR"}, {"message", std::string("solver failed: ") + e.what()}}, false);
+    }
+  });
+}
+
+}  // namespace robocal::daemon

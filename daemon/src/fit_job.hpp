@@ -1,0 +1,41 @@
+// The fit of a completed shell set, on a worker thread of its own: robocal solve's assessment of
+// the run's samples file, the calibrated model and the report written into the run folder, and a
+// RESULT published (and kept for `result`). At most one fit runs; the next waits for it.
+#pragma once
+
+#include "run_shared.hpp"
+
+#include <robocal/daemon/run.hpp>
+#include <robocal/daemon/run_store.hpp>
+#include <robocal/kinematics/model.hpp>
+#include <robocal/kinematics/sample.hpp>
+
+#include <future>
+#include <vector>
+
+namespace robocal::daemon {
+
+class FitJob {
+ public:
+  FitJob(const Model& nominal, RunShared& shared, RunController::Publish publish)
+      : nominal_(nominal), shared_(shared), publish_(std::move(publish)) {}
+  ~FitJob() { wait(); }
+  FitJob(const FitJob&) = delete;
+  FitJob& operator=(const FitJob&) = delete;
+
+  // Fits set `set_index` (its bar extension `set_extension_mm`) from the run's samples. `samples`
+  // is what the run measured: the samples file is read back and fitted when it holds the same
+  // number, so that the RESULT is `robocal solve --json` of that file.
+  void launch(RunDir dir, std::vector<Sample> samples, double set_extension_mm, int set_index);
+  void wait() {
+    if (running_.valid()) running_.wait();
+  }
+
+ private:
+  const Model& nominal_;
+  RunShared& shared_;
+  const RunController::Publish publish_;
+  std::future<void> running_;
+};
+
+}  // namespace robocal::daemon

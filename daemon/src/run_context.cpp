@@ -1,0 +1,306 @@
+#include "run_context.hpp"
+
+#include <robocal/drivers/errors.hpp>
+
+#include <spdlog/spdlog.h>
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+namespace robocal::daemon {
+namespace {
+
+using json = nlohmann::json;
+
+std::int64_t monotonicMicros(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration_cast<std::chrono::microseconds>(t.time_since_epoch()).count();
+}
+
+std::chrono::steady_clock::duration fromSeconds(double seconds) {
+  return std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(seconds));
+}
+
+proto::BarKind wireKind(drivers::BarLineKind kind) {
+  switch (kind) {
+    case drivers::BarLineKind::kReading:
+      return proto::BarKind::kReading;
+    case drivers::BarLineKind::kOverRange:
+      return proto::BarKind::kOverRange;
+    case drivers::BarLineKind::kNoProbe:
+      return proto::BarKind::kNoProbe;
+    case drivers::BarLineKind::kDeviceError:
+    case drivers::BarLineKind::kGarbage:
+      break;
+  }
+  return proto::BarKind::kDeviceError;
+}
+
+}  // namespace
+
+RunContext::RunContext(const DaemonConfig& c, const Model& m, const std::optional<CellConfig>& cell,
+                       RunController::Publish p, RunStore& s, RunShared& sh, CellIo& cell_io)
+    : config(c), nominal(m), store(s), shared(sh), io(cell_io), publish(std::move(p)), cell_(cell) {
+  io.onBarLine([this](const drivers::BarReading& r) { onBarLine(r); });
+}
+
+// ------------------------------------------------------------------------ state and events
+
+void RunContext::setState(proto::RunState to, const std::string& reason) {
+  const proto::RunState from = shared.with([&](RunData& d) {
+    const proto::RunState was = d.state;
+    d.state = to;
+    d.state_reason = reason;
+    return was;
+  });
+  json ev = {
+      {"class", "STATE"}, {"from", proto::runStateName(from)}, {"to", proto::runStateName(to)}};
+  if (!reason.empty()) ev["reason"] = reason;
+  spdlog::info("state {} -> {}{}{}", proto::runStateName(from), proto::runStateName(to),
+               reason.empty() ? "" : ": ", reason);
+  publish(ev, false);
+}
+
+void RunContext::event(RunDir& dir, json ev) {
+  dir.logEvent(ev);
+  ev["class"] = "EVENT";
+  publish(ev, false);
+}
+
+std::string RunContext::stopReason(const std::string& fallback) const {
+  return shared.with(
+      [&](const RunData& d) { return d.stop_reason.empty() ? fallback : d.stop_reason; });
+}
+
+void RunContext::checkpoint() {
+  if (shared.abort_requested) throw StopRun{StopRun::kAbort, stopReason("abort requested")};
+  if (shared.pause_requested) throw StopRun{StopRun::kPause, stopReason("pause requested")};
+}
+
+void RunContext::updateProgress(int done, int total, double time_left_s) {
+  const json p = shared.with([&](RunData& d) {
+    d.points_done = done;
+    d.points_total = total;
+    d.eta_s = time_left_s;
+    return json{{"class", "PROGRESS"},      {"shell", d.shell_number},
+                {"shells", d.shells_total}, {"connection", d.connection_name},
+                {"points_done", done},      {"points_total", total},
+                {"eta_s", time_left_s}};
+  });
+  publish(p, false);
+}
+
+// ------------------------------------------------------------------------ devices
+
+void RunContext::connectDevices() {
+  const DeviceState now = io.connect();
+  shared.with([&](RunData& d) { d.devices = now; });
+}
+
+void RunContext::ensureDevices() {
+  connectDevices();
+  const DeviceState now = shared.with([](const RunData& d) { return d.devices; });
+  if (!now.bar_connected) throw StopRun{StopRun::kFault, "ball-bar reader: " + now.bar_error};
+  if (!now.val_connected) throw StopRun{StopRun::kFault, "VAL II controller: " + now.val_error};
+}
+
+void RunContext::reportLinkFaults(RunDir& dir) {
+  const std::map<std::string, long> now = io.faultCounts();
+  json ev = {{"event", "link_faults"}};
+  for (const auto& [name, count] : now)
+    if (count > link_faults_reported_[name]) ev[name] = count - link_faults_reported_[name];
+  link_faults_reported_ = now;
+  if (ev.size() > 1) event(dir, ev);
+}
+
+// ------------------------------------------------------------------------ the bar
+
+void RunContext::onBarLine(const drivers::BarReading& r) {
+  last_reading_ = r;
+  if (collecting_ && r.kind == drivers::BarLineKind::kReading) window_.push_back(r.value_mm);
+  json b = {{"class", "BAR"},
+            {"seq", r.sequence},
+            {"kind", proto::barKindName(wireKind(r.kind))},
+            {"t_us", monotonicMicros(r.time)}};
+  if (r.kind == drivers::BarLineKind::kReading) {
+    b["deflection_mm"] = r.value_mm;
+    if (bar_offset_mm_ > 0) b["length_mm"] = bar_offset_mm_ + r.value_mm;
+  }
+  shared.with([&](RunData& d) { d.latest_bar = b; });
+  publish(b, true);
+}
+
+void RunContext::setAttachment(const BarAttachment& a) {
+  store.setBarAttachment(a);
+  shared.with([&](RunData& d) { d.attachment = a; });
+}
+
+BarAttachment RunContext::attachment() const {
+  return shared.with([](const RunData& d) { return d.attachment; });
+}
+
+std::optional<double> RunContext::watchBar() {
+  if (!io.barConnected()) throw StopRun{StopRun::kFault, "ball-bar reader disconnected"};
+  if (io.barStale())
+    throw StopRun{StopRun::kFault, "no ball-bar reading for " +
+                                       std::to_string(config.drivers.bar.stale_after_s) + " s"};
+  if (!last_reading_) return std::nullopt;
+  if (last_reading_->kind != drivers::BarLineKind::kReading)
+    throw StopRun{StopRun::kFault,
+                  std::string("ball-bar reports ") + drivers::barLineKindName(last_reading_->kind)};
+  const double d = last_reading_->value_mm;
+  if (std::abs(d) > config.bar_hard_limit_mm)
+    throw StopRun{StopRun::kFault, "bar deflection " + std::to_string(d) +
+                                       " mm past the hard limit " +
+                                       std::to_string(config.bar_hard_limit_mm) + " mm"};
+  if (std::abs(d) > config.bar_soft_limit_mm) return d;
+  return std::nullopt;
+}
+
+void RunContext::watchDetached(const std::optional<double>& reading_at_start) {
+  if (!reading_at_start || !last_reading_) return;
+  const bool over_range = last_reading_->kind == drivers::BarLineKind::kOverRange;
+  if (last_reading_->kind != drivers::BarLineKind::kReading && !over_range) return;
+  const double change_mm = over_range ? std::numeric_limits<double>::infinity()
+                                      : last_reading_->value_mm - *reading_at_start;
+  if (std::abs(change_mm) <= config.detached_change_mm) return;
+  BarAttachment doubt = attachment();
+  doubt.maybe_attached = true;
+  setAttachment(doubt);  // the next start or resume asks to detach it first
+  char buf[64];
+  std::snprintf(buf, sizeof buf, over_range ? "from %+.3f mm to over range" : "by %+.3f mm",
+                over_range ? *reading_at_start : change_mm);
+  throw StopRun{StopRun::kFault, std::string("the ball-bar reading changed ") + buf +
+                                     " while the robot moved with the bar believed detached: "
+                                     "check that the bar is off the robot"};
+}
+
+// ------------------------------------------------------------------------ moves and time
+
+void RunContext::spin(double seconds, bool watch_bar) {
+  spinUntil(Clock::now() + fromSeconds(seconds), watch_bar);
+}
+
+// Each slice ends at the deadline, not 10 ms after the last check: no overshoot past the
+// event loop's wake-up.
+void RunContext::spinUntil(Clock::time_point until, bool watch_bar) {
+  for (auto now = Clock::now(); now < until; now = Clock::now()) {
+    checkpoint();
+    io.poll(std::min(until, now + std::chrono::milliseconds(10)));
+    if (watch_bar) watchBar();
+  }
+}
+
+JointsDeg RunContext::move(const JointsDeg& target, bool bar_attached) {
+  checkpoint();
+  if (bar_attached) watchBar();  // nothing starts with the bar already in fault
+  std::optional<double> detached_reading;
+  if (!bar_attached && last_reading_ && last_reading_->kind == drivers::BarLineKind::kReading)
+    detached_reading = last_reading_->value_mm;
+  return io
+      .move(target,
+            [&] {
+              checkpoint();
+              if (bar_attached)
+                watchBar();
+              else
+                watchDetached(detached_reading);
+              return false;
+            })
+      .joints_deg;
+}
+
+RunContext::Moved RunContext::moveRecentring(const JointsDeg& target) {
+  checkpoint();
+  if (const auto d = watchBar()) return {io.where(), d};
+  std::optional<double> past_soft;
+  const CellIo::MoveOutcome out = io.move(target, [&] {
+    checkpoint();
+    past_soft = watchBar();
+    return past_soft.has_value();
+  });
+  return {out.joints_deg, out.stopped ? past_soft : std::nullopt};
+}
+
+RunContext::Measurement RunContext::measureHere(double window_s) {
+  struct Collecting {  // also when a fault ends the window early: nothing collects while idle
+    bool& flag;
+    explicit Collecting(bool& f) : flag(f) { flag = true; }
+    ~Collecting() { flag = false; }
+  };
+  Measurement m;
+  window_.clear();
+  const Collecting collect(collecting_);
+  m.bar_window_start = Clock::now();
+  m.joints_deg = io.where();
+  m.where_end = Clock::now();
+  spinUntil(m.bar_window_start + fromSeconds(window_s), true);
+  // The window may have passed while WHERE was answered: the bar is checked in any case.
+  checkpoint();
+  watchBar();
+  const auto deadline = Clock::now() + fromSeconds(config.drivers.bar.stale_after_s);
+  while (window_.empty() && Clock::now() < deadline) spin(0.02, true);
+  if (window_.empty()) throw StopRun{StopRun::kFault, "no ball-bar reading to record"};
+  double sum = 0, lo = window_.front(), hi = window_.front();
+  for (double v : window_) {
+    sum += v;
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
+  }
+  m.deflection_mm = sum / static_cast<double>(window_.size());
+  m.spread_mm = hi - lo;
+  m.readings = window_.size();
+  return m;
+}
+
+// ------------------------------------------------------------------------ the operator
+
+void RunContext::waitConfirm(RunDir& dir, json prompt, int shell,
+                             const std::function<void(double)>& on_nudge) {
+  const int seen = shared.with([&](RunData& d) {
+    d.prompt = prompt;
+    d.prompt_shell = shell;
+    d.nudge_mm.reset();
+    d.nudged_mm = 0;
+    return d.confirms;
+  });
+  setState(proto::RunState::kAwaitingConfirm, prompt.value("message", ""));
+  dir.logEvent({{"event", "prompt"}, {"prompt", prompt}});
+  publish(prompt, false);
+  while (true) {
+    checkpoint();
+    std::optional<double> nudge;
+    const bool confirmed = shared.with([&](RunData& d) {
+      if (d.confirms != seen) {
+        d.prompt = nullptr;
+        return true;
+      }
+      nudge.swap(d.nudge_mm);
+      return false;
+    });
+    if (confirmed) break;
+    if (nudge && on_nudge) {
+      on_nudge(*nudge);
+      event(dir, {{"event", "nudged"}, {"shell", shell}, {"mm", *nudge}});
+    }
+    if (!io.poll(Clock::now() + std::chrono::milliseconds(20)))
+      shared.waitFor(std::chrono::milliseconds(20));
+  }
+  dir.logEvent({{"event", "confirmed"}, {"shell", shell}});
+}
+
+void RunContext::waitDetach(RunDir& dir, int shell, const std::string& message) {
+  bar_offset_mm_ = 0;
+  const BarAttachment was = attachment();
+  json prompt = {{"class", "PROMPT"}, {"action", "detach"}, {"shell", shell}, {"message", message}};
+  if (was.ball > 0) {
+    prompt["ball"] = was.ball;
+    prompt["chuck"] = was.chuck;
+    prompt["extension_mm"] = was.extension_mm;
+  }
+  waitConfirm(dir, prompt, shell);
+  setAttachment({});
+}
+
+}  // namespace robocal::daemon

@@ -1,0 +1,125 @@
+// The run thread's toolbox: the cell (CellIo), the run's view of the bar, and the operations
+// every part of a run uses (state changes, watched moves, measurements, the operator's prompts).
+// Run thread only; what it shares with the client loop goes through RunShared.
+#pragma once
+
+#include "run_shared.hpp"
+
+#include <robocal/daemon/cell_io.hpp>
+#include <robocal/daemon/config.hpp>
+#include <robocal/daemon/run.hpp>
+#include <robocal/daemon/run_store.hpp>
+#include <robocal/planner/cell.hpp>
+#include <robocal/planner/plan.hpp>
+
+#include <chrono>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace robocal::daemon {
+
+// Why the run left the normal path. Pause and fault leave it resumable; abort does not.
+struct StopRun {
+  enum Kind { kPause, kFault, kAbort } kind;
+  std::string reason;
+};
+
+class RunContext {
+ public:
+  using Clock = std::chrono::steady_clock;
+
+  RunContext(const DaemonConfig& config, const Model& nominal,
+             const std::optional<CellConfig>& cell, RunController::Publish publish, RunStore& store,
+             RunShared& shared, CellIo& io);
+
+  const DaemonConfig& config;
+  const Model& nominal;
+  RunStore& store;
+  RunShared& shared;
+  CellIo& io;
+  const RunController::Publish publish;
+
+  const CellConfig& cellFor(const Plan& plan) const { return cell_ ? *cell_ : plan.cell; }
+
+  // ---- state and events
+  void setState(proto::RunState to, const std::string& reason = {});
+  // Into the run's event log and out to watchers as an EVENT.
+  void event(RunDir& dir, nlohmann::json ev);
+  // Throws StopRun when a pause or an abort was asked for.
+  void checkpoint();
+  void updateProgress(int done, int total, double time_left_s);
+
+  // ---- devices
+  // Connects what is not connected and records the outcome for STATUS and `start`. Never throws.
+  void connectDevices();
+  // Before a run: both devices answer, or StopRun (fault) with the port's error.
+  void ensureDevices();
+  // The drivers' absorbed faults since the last report, into the event log as "link_faults".
+  void reportLinkFaults(RunDir& dir);
+  void forgetLinkFaults() { link_faults_reported_ = io.faultCounts(); }
+
+  // ---- the bar
+  // The bar may be attached from now on (or no longer): on disk before anything moves.
+  void setAttachment(const BarAttachment& a);
+  BarAttachment attachment() const;
+  bool barMaybeAttached() const { return attachment().maybe_attached; }
+  // Nominal length plus extension of the bar now attached (0: none).
+  void setBarOffset(double length_mm) { bar_offset_mm_ = length_mm; }
+  double barOffset() const { return bar_offset_mm_; }
+  const std::optional<drivers::BarReading>& lastReading() const { return last_reading_; }
+  void forgetReading() { last_reading_.reset(); }
+  // Throws StopRun (fault) when the bar is out of range, silent, or past the hard limit; returns
+  // the deflection when it is past the soft limit.
+  std::optional<double> watchBar();
+
+  // ---- moves and time
+  // Pumps I/O (bar lines arrive) for a while / until a deadline, checking stop requests, and the
+  // bar when `watch_bar`.
+  void spin(double seconds, bool watch_bar);
+  void spinUntil(Clock::time_point until, bool watch_bar);
+  // A joint move watched for stop requests, controller errors and the bar: with the bar attached
+  // its limits; believed detached, a reading that changes (the bar is still attached after all).
+  JointsDeg move(const JointsDeg& target, bool bar_attached);
+  // A move with the bar attached that stops where the bar passes its soft limit.
+  struct Moved {
+    JointsDeg joints_deg;
+    std::optional<double> recentre_mm;  // the deflection that stopped it short
+  };
+  Moved moveRecentring(const JointsDeg& target);
+
+  struct Measurement {
+    JointsDeg joints_deg;
+    double deflection_mm = 0, spread_mm = 0;
+    std::size_t readings = 0;
+    Clock::time_point bar_window_start, where_end;
+  };
+  // The bar averaged over the window and the actual joints (WHERE) read within it, watched. The
+  // window opens at once: the controller's answer does not delay it.
+  Measurement measureHere() { return measureHere(config.bar_window_s); }
+  Measurement measureHere(double window_s);
+
+  // ---- the operator
+  // Publishes the PROMPT and waits for the operator's confirm; `on_nudge` (when given) carries out
+  // nudge requests meanwhile.
+  void waitConfirm(RunDir& dir, nlohmann::json prompt, int shell,
+                   const std::function<void(double)>& on_nudge = {});
+  // Asks to detach the bar (shell 0: at the end of the run) and records, once confirmed, that it
+  // is off the robot.
+  void waitDetach(RunDir& dir, int shell, const std::string& message);
+
+ private:
+  void onBarLine(const drivers::BarReading& r);
+  void watchDetached(const std::optional<double>& reading_at_start);
+  std::string stopReason(const std::string& fallback) const;
+
+  const std::optional<CellConfig>& cell_;
+  std::optional<drivers::BarReading> last_reading_;
+  std::vector<double> window_;  // readings collected while averaging
+  bool collecting_ = false;
+  double bar_offset_mm_ = 0;
+  std::map<std::string, long> link_faults_reported_;
+};
+
+}  // namespace robocal::daemon

@@ -1,0 +1,392 @@
+#include "shell_runner.hpp"
+
+#include <robocal/daemon/connection_check.hpp>
+#include <robocal/planner/check.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+namespace robocal::daemon {
+namespace {
+
+using json = nlohmann::json;
+using Clock = std::chrono::steady_clock;
+
+// A data point of a shell, as the samples file identifies it.
+std::tuple<int, double, double> pointKey(int shell, double lat_deg, double lon_deg) {
+  return {shell, std::round(lat_deg * 1e3) / 1e3, std::round(lon_deg * 1e3) / 1e3};
+}
+
+Clock::duration fromSeconds(double seconds) {
+  return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
+}
+
+// One data point's timing, from the end of its move: the dwell (settle) until the bar window
+// opens, and the way to the sample's fsync. Logged as a "timing" event in the run's event log
+// (`robocal run-timing` summarises them; docs/reliability.md, dwell timing).
+struct PointTiming {
+  Clock::time_point motion_complete, bar_window_start, where_end, sample_on_disk;
+
+  static double toMicrosecond(double ms) { return std::round(ms * 1e3) / 1e3; }
+  static double msBetween(Clock::time_point from, Clock::time_point to) {
+    return toMicrosecond(std::chrono::duration<double, std::milli>(to - from).count());
+  }
+  json toEvent(int shell, double lat_deg, double lon_deg, double settle_s) const {
+    const double settle_achieved_ms = msBetween(motion_complete, bar_window_start);
+    return {{"event", "timing"},
+            {"shell", shell},
+            {"lat_deg", lat_deg},
+            {"lon_deg", lon_deg},
+            {"settle_s", settle_s},
+            {"settle_achieved_ms", settle_achieved_ms},
+            {"settle_error_ms", toMicrosecond(settle_achieved_ms - settle_s * 1e3)},
+            {"where_ms", msBetween(bar_window_start, where_end)},
+            {"motion_to_disk_ms", msBetween(motion_complete, sample_on_disk)}};
+  }
+};
+
+std::string connectMessage(const ShellPlan& shell) {
+  const Connection& c = shell.connection;
+  return "Connect ball " + std::to_string(c.ball_index + 1) + " to chuck " +
+         std::to_string(c.chuck_index + 1) +
+         (shell.extension_mm > 0
+              ? " with the " + std::to_string(static_cast<int>(shell.extension_mm)) +
+                    " mm extension"
+              : " without extension") +
+         ", then confirm.";
+}
+
+}  // namespace
+
+ShellRunner::ShellRunner(RunContext& ctx, FitJob& fits, RunDir& dir, const Plan& plan)
+    : ctx_(ctx),
+      fits_(fits),
+      dir_(dir),
+      plan_(plan),
+      cell_(ctx.cellFor(plan)),
+      samples_(dir.loadSamples()),
+      centring_(ctx.nominal, cell_, ctx.config.centering, samples_) {
+  for (const Sample& s : samples_) done_.insert(pointKey(s.shell, s.lat_deg, s.lon_deg));
+  for (const auto& sh : plan_.shells)
+    for (const auto& st : sh.steps) total_points_ += st.kind == StepKind::kPoint;
+  while (std::filesystem::exists(dir_.file("replans/" + std::to_string(replans_ + 1) + ".json")))
+    ++replans_;
+}
+
+// ------------------------------------------------------------------------ book-keeping
+
+bool ShellRunner::isDone(int shell, const PlanStep& step) const {
+  return done_.count(pointKey(shell, step.lat_deg, step.lon_deg)) > 0;
+}
+
+int ShellRunner::pointsLeft(const ShellPlan& shell) const {
+  int left = 0;
+  for (const auto& st : shell.steps)
+    left += st.kind == StepKind::kPoint && !isDone(shell.shell, st);
+  return left;
+}
+
+double ShellRunner::plannedPointSeconds(const ShellPlan& shell) const {
+  const ShellSummary& s = shell.summary;
+  if (s.points <= 0) return 0;
+  const double moves_s = std::max(0.0, s.duration_s - s.points * cell_.motion.settle_s);
+  return moves_s / s.points + ctx_.config.settle_s + ctx_.config.bar_window_s;
+}
+
+double ShellRunner::timeLeftSeconds() const {
+  double planned_s = 0;
+  for (const auto& sh : plan_.shells) planned_s += pointsLeft(sh) * plannedPointSeconds(sh);
+  return time_left_.seconds(planned_s);
+}
+
+void ShellRunner::progress() {
+  ctx_.updateProgress(static_cast<int>(samples_.size()), total_points_, timeLeftSeconds());
+}
+
+Sample ShellRunner::shellSample(const ShellPlan& shell, const RunContext::Measurement& m) const {
+  Sample s;
+  s.shell = shell.shell;
+  s.ball_index = shell.connection.ball_index;
+  s.chuck_index = shell.connection.chuck_index;
+  s.extension_mm = shell.extension_mm;
+  s.joints_deg = m.joints_deg;
+  s.length_mm = ctx_.barOffset() + m.deflection_mm;
+  return s;
+}
+
+// ------------------------------------------------------------------------ the run
+
+void ShellRunner::run() {
+  ctx_.shared.with([&](RunData& d) { d.shells_total = static_cast<int>(plan_.shells.size()); });
+  progress();
+  for (std::size_t si = 0; si < plan_.shells.size(); ++si) {
+    const ShellPlan& shell = plan_.shells[si];
+    const int left = pointsLeft(shell);
+    if (left == 0) continue;
+    int points = 0;
+    for (const auto& st : shell.steps) points += st.kind == StepKind::kPoint;
+    ctx_.shared.with([&](RunData& d) {
+      d.shell_number = shell.shell;
+      d.connection_name = connectionName(shell.connection);
+    });
+    const JointsDeg q = connect(shell);
+    measure(shell, points - left, q);
+    completeSet(si);
+  }
+  // The run ends with the bar off the robot: the next run must not move with it attached.
+  if (ctx_.barMaybeAttached())
+    ctx_.waitDetach(dir_, 0,
+                    "The run is complete: detach the ball-bar from the robot, then confirm.");
+}
+
+JointsDeg ShellRunner::corrected(const ShellPlan& shell, const JointsDeg& q,
+                                 double deflection_mm) const {
+  std::string problem;
+  if (auto target = correction(centring_.model(), cell_, shell, q, deflection_mm, problem))
+    return *target;
+  throw StopRun{StopRun::kFault, "corrective move of " + std::to_string(deflection_mm) +
+                                     " mm on shell " + std::to_string(shell.shell) +
+                                     " refused: " + problem};
+}
+
+JointsDeg ShellRunner::connect(const ShellPlan& shell) {
+  const Connection& c = shell.connection;
+  const std::string conn = connectionName(c);
+  // A bar left attached (by the last shell, an earlier run, a pause or a crash) is detached
+  // before anything moves.
+  if (ctx_.barMaybeAttached())
+    ctx_.waitDetach(dir_, shell.shell, "Detach the ball-bar from the robot, then confirm.");
+  ctx_.setState(proto::RunState::kMoving,
+                "to shell " + std::to_string(shell.shell) + "'s connect pose");
+  JointsDeg q = ctx_.move(shell.connect.joints_deg, false);
+  ctx_.waitConfirm(dir_,
+                   {{"class", "PROMPT"},
+                    {"action", "connect"},
+                    {"shell", shell.shell},
+                    {"ball", c.ball_index + 1},
+                    {"chuck", c.chuck_index + 1},
+                    {"extension_mm", shell.extension_mm},
+                    {"message", connectMessage(shell)}},
+                   shell.shell, [&](double mm) {
+                     // The bar is not attached yet: the ball moves along the line to the chuck.
+                     q = ctx_.move(corrected(shell, q, -mm), false);
+                   });
+  ctx_.setAttachment({true, c.ball_index + 1, c.chuck_index + 1, shell.extension_mm, dir_.id()});
+  ctx_.setBarOffset(cell_.bar.nominal_length_mm + shell.extension_mm);
+  // The bar must read, and read near zero, before anything moves with it attached.
+  ctx_.forgetReading();
+  ctx_.spin(std::min(1.0, ctx_.config.drivers.bar.stale_after_s), false);
+  if (!ctx_.lastReading())
+    throw StopRun{StopRun::kFault, "no ball-bar reading after connecting " + conn};
+  ctx_.watchBar();
+  dir_.logEvent({{"event", "connected"},
+                 {"shell", shell.shell},
+                 {"connection", conn},
+                 {"deflection_mm", ctx_.lastReading()->value_mm}});
+  // The model's error shows at the connect pose already: move the ball along the bar to zero
+  // deflection before the shell starts.
+  for (int k = 0;
+       k < 3 && std::abs(ctx_.lastReading()->value_mm) > 0.5 * ctx_.config.bar_soft_limit_mm; ++k) {
+    const double d = ctx_.lastReading()->value_mm;
+    ctx_.event(dir_,
+               {{"event", "recentre"}, {"shell", shell.shell}, {"step", -1}, {"deflection_mm", d}});
+    q = ctx_.move(corrected(shell, q, d), true);
+    ctx_.forgetReading();
+    ctx_.spin(0.2, false);
+    if (!ctx_.lastReading())
+      throw StopRun{StopRun::kFault, "no ball-bar reading after re-centring"};
+    ctx_.watchBar();
+  }
+  verifyConnection(shell, q);
+  if (centring_.enabled()) {
+    centring_.add(shellSample(shell, ctx_.measureHere()));
+    centring_.refit();
+  }
+  return q;
+}
+
+void ShellRunner::verifyConnection(const ShellPlan& shell, JointsDeg& q) {
+  const DaemonConfig& config = ctx_.config;
+  const double step_mm = std::min(config.connection_check_mm, 0.4 * config.bar_soft_limit_mm);
+  if (step_mm <= 0) return;
+  // Averaged over at least half a second: the steps are tenths of a millimetre, the noise of
+  // one reading a few hundredths.
+  const auto settledMeasurement = [&] {
+    ctx_.spin(config.settle_s, true);
+    return ctx_.measureHere(std::max(config.bar_window_s, 0.5));
+  };
+  const JointsDeg start = q;
+  double before_mm = settledMeasurement().deflection_mm;
+  // Toward zero first: the bar stays inside its soft limit all the way.
+  const double sign = before_mm > 0 ? -1.0 : 1.0;
+  std::vector<ProbeStep> steps;
+  json record = json::array();
+  for (const double commanded_mm : {sign * step_mm, -2.0 * sign * step_mm}) {
+    q = ctx_.move(corrected(shell, q, -commanded_mm), true);
+    const double after_mm = settledMeasurement().deflection_mm;
+    steps.push_back({commanded_mm, after_mm - before_mm});
+    record.push_back({{"commanded_mm", commanded_mm}, {"reading_change_mm", after_mm - before_mm}});
+    before_mm = after_mm;
+  }
+  q = ctx_.move(start, true);
+  const std::string problem = connectionCheckProblem(steps);
+  ctx_.event(dir_, {{"event", "connection_check"},
+                    {"shell", shell.shell},
+                    {"connection", connectionName(shell.connection)},
+                    {"steps", record},
+                    {"ok", problem.empty()}});
+  if (!problem.empty())
+    throw StopRun{StopRun::kFault,
+                  "connection check on shell " + std::to_string(shell.shell) + " (ball " +
+                      std::to_string(shell.connection.ball_index + 1) + ", chuck " +
+                      std::to_string(shell.connection.chuck_index + 1) + "): " + problem};
+}
+
+void ShellRunner::replanFrom(ShellPlan& shell, std::size_t from, const JointsDeg& at,
+                             const std::string& why) {
+  const ShellPlanner planner(centring_.model(), cell_);
+  const std::size_t dropped_before = shell.dropped.size();
+  shell = planner.replanRemaining(shell, from, at);
+  for (std::size_t k = dropped_before; k < shell.dropped.size(); ++k)
+    ctx_.event(dir_, {{"event", "point_dropped"},
+                      {"shell", shell.shell},
+                      {"lat_deg", shell.dropped[k].lat_deg},
+                      {"lon_deg", shell.dropped[k].lon_deg},
+                      {"reason", shell.dropped[k].reason}});
+  ++replans_;
+  json steps = json::array();
+  for (std::size_t i = from; i < shell.steps.size(); ++i) {
+    const auto& s = shell.steps[i];
+    steps.push_back({{"kind", s.kind == StepKind::kPoint ? "point" : "via"},
+                     {"joints", std::vector<double>(s.joints_deg.data(), s.joints_deg.data() + 6)},
+                     {"lat_deg", s.lat_deg},
+                     {"lon_deg", s.lon_deg}});
+  }
+  const std::string file = "replans/" + std::to_string(replans_) + ".json";
+  std::filesystem::create_directories(dir_.file("replans"));
+  dir_.writeJson(file,
+                 {{"shell", shell.shell}, {"from_step", from}, {"why", why}, {"steps", steps}});
+  dir_.logEvent({{"event", "replan"},
+                 {"shell", shell.shell},
+                 {"from_step", from},
+                 {"why", why},
+                 {"file", file}});
+}
+
+void ShellRunner::measure(const ShellPlan& planned, int already, JointsDeg q) {
+  // What is left of the shell, re-planned from here when points are done or the model is refined.
+  ShellPlan shell = planned;
+  if (already > 0) {
+    shell.steps.clear();
+    for (const auto& st : planned.steps)
+      if (st.kind == StepKind::kPoint && !isDone(planned.shell, st)) shell.steps.push_back(st);
+  }
+  if (already > 0 || centring_.refined())
+    replanFrom(shell, 0, q, already > 0 ? "resume" : "refined model");
+
+  ctx_.setState(proto::RunState::kMeasuring, "shell " + std::to_string(planned.shell) + " " +
+                                                 connectionName(planned.connection));
+  const double point_planned_s = plannedPointSeconds(planned);
+  shell_watch_.startShell();
+  pace_mark_ = Clock::now();  // the operator's time at prompts is not the robot's pace
+  int corrections = 0;
+  std::size_t next = 0;
+  while (next < shell.steps.size()) {
+    const PlanStep& step = shell.steps[next];
+    if (ctx_.config.centering) {
+      const RunContext::Moved moved = ctx_.moveRecentring(step.joints_deg);
+      q = moved.joints_deg;
+      if (moved.recentre_mm) {
+        if (++corrections > 20)
+          throw StopRun{StopRun::kFault,
+                        "cannot keep the bar centred on shell " + std::to_string(planned.shell)};
+        ctx_.event(dir_, {{"event", "recentre"},
+                          {"shell", planned.shell},
+                          {"step", next},
+                          {"deflection_mm", *moved.recentre_mm}});
+        q = ctx_.move(corrected(planned, q, *moved.recentre_mm), true);
+        centring_.add(shellSample(planned, ctx_.measureHere()));
+        centring_.refit();
+        replanFrom(shell, next, q, "recentre");
+        continue;
+      }
+    } else {
+      q = ctx_.move(step.joints_deg, true);
+    }
+    if (step.kind == StepKind::kPoint) {
+      const JointsDeg actual = recordPoint(planned, step, point_planned_s);
+      if (next + 1 < shell.steps.size() && centring_.refitDue()) {
+        centring_.refit();
+        replanFrom(shell, next + 1, actual, "refined model");
+      }
+    }
+    ++next;
+  }
+}
+
+JointsDeg ShellRunner::recordPoint(const ShellPlan& planned, const PlanStep& step,
+                                   double point_planned_s) {
+  const DaemonConfig& config = ctx_.config;
+  PointTiming timing;
+  const auto motion_end = timing.motion_complete = Clock::now();
+  ctx_.spinUntil(motion_end + fromSeconds(config.settle_s), true);
+  const RunContext::Measurement m = ctx_.measureHere();
+  const double dwell_s = std::chrono::duration<double>(m.bar_window_start - motion_end).count();
+  Sample s = shellSample(planned, m);
+  s.lat_deg = step.lat_deg;
+  s.lon_deg = step.lon_deg;
+  dir_.appendSample(s, m.spread_mm);  // on disk before the robot moves again
+  timing.sample_on_disk = Clock::now();
+  timing.bar_window_start = m.bar_window_start;
+  timing.where_end = m.where_end;
+  dir_.logEvent(timing.toEvent(s.shell, s.lat_deg, s.lon_deg, config.settle_s));
+  ctx_.reportLinkFaults(dir_);
+  samples_.push_back(s);
+  centring_.add(s);
+  done_.insert(pointKey(s.shell, s.lat_deg, s.lon_deg));
+  ctx_.publish({{"class", "SAMPLE"},
+                {"shell", s.shell},
+                {"lat_deg", s.lat_deg},
+                {"lon_deg", s.lon_deg},
+                {"joints", std::vector<double>(m.joints_deg.data(), m.joints_deg.data() + 6)},
+                {"length_mm", s.length_mm},
+                {"spread_mm", m.spread_mm},
+                {"readings", m.readings},
+                {"dwell_s", dwell_s}},
+               false);
+  const auto now = Clock::now();
+  time_left_.pointMeasured(point_planned_s,
+                           std::chrono::duration<double>(now - pace_mark_).count());
+  pace_mark_ = now;
+  progress();
+  if (const std::string suspect = shell_watch_.point(m.deflection_mm, m.spread_mm);
+      !suspect.empty()) {
+    const Connection& c = planned.connection;
+    throw StopRun{StopRun::kFault, "shell " + std::to_string(planned.shell) + " " +
+                                       connectionName(c) + ": " + suspect + ": check that ball " +
+                                       std::to_string(c.ball_index + 1) +
+                                       " is tight in its socket and the bar sits in chuck " +
+                                       std::to_string(c.chuck_index + 1) + ", then resume"};
+  }
+  return m.joints_deg;
+}
+
+void ShellRunner::completeSet(std::size_t shell_index) {
+  const double extension_mm = plan_.shells[shell_index].extension_mm;
+  // A shell set is complete when no later shell has the same extension.
+  for (std::size_t k = shell_index + 1; k < plan_.shells.size(); ++k)
+    if (plan_.shells[k].extension_mm == extension_mm) return;
+  // Sets are numbered by the order of their extensions' first shells.
+  std::vector<double> seen;
+  for (const auto& sh : plan_.shells) {
+    if (std::find(seen.begin(), seen.end(), sh.extension_mm) == seen.end())
+      seen.push_back(sh.extension_mm);
+    if (sh.extension_mm == extension_mm) break;
+  }
+  const int set_index = static_cast<int>(seen.size());
+  ctx_.event(dir_, {{"event", "set_complete"}, {"set", set_index}, {"extension_mm", extension_mm}});
+  fits_.launch(dir_, samples_, extension_mm, set_index);
+}
+
+}  // namespace robocal::daemon

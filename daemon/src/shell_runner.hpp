@@ -1,0 +1,72 @@
+// One session of a run on the robot: the shells of the plan not yet measured, one after another.
+// For each: the bar off the robot, the connect pose, the operator's connection (with nudges),
+// the reading near zero, the connection check; then the steps, watched, with a sample recorded at
+// each data point, the bar kept centred (Centring) and the rest of the shell re-planned from
+// where the robot is; a completed shell set goes to the fit. The run ends with the bar detached.
+// A stop (pause, fault, abort) is thrown as StopRun.
+#pragma once
+
+#include "centring.hpp"
+#include "fit_job.hpp"
+#include "run_context.hpp"
+
+#include <robocal/daemon/shell_watch.hpp>
+#include <robocal/daemon/time_left.hpp>
+
+#include <set>
+#include <tuple>
+#include <vector>
+
+namespace robocal::daemon {
+
+class ShellRunner {
+ public:
+  ShellRunner(RunContext& ctx, FitJob& fits, RunDir& dir, const Plan& plan);
+  void run();
+
+ private:
+  bool isDone(int shell, const PlanStep& step) const;
+  int pointsLeft(const ShellPlan& shell) const;
+  // Robot time left: the plan's time for the points not yet measured, at the pace measured.
+  double timeLeftSeconds() const;
+  // The robot time a data point of this shell takes by the plan's duration model, with this
+  // daemon's dwell and bar window in place of the cell's planned dwell.
+  double plannedPointSeconds(const ShellPlan& shell) const;
+  void progress();
+
+  // Up to the bar attached, read near zero and checked; the joints where the robot stands.
+  JointsDeg connect(const ShellPlan& shell);
+  // After a connect: the ball moves a small step along the expected bar line and back past the
+  // start, and the bar must follow (connection_check.hpp). The ball ends where it started.
+  void verifyConnection(const ShellPlan& shell, JointsDeg& q);
+  // The shell's steps from `q`; `already` of its points were measured in an earlier session.
+  void measure(const ShellPlan& planned, int already, JointsDeg q);
+  // Dwells, measures and records a data point (on disk before the robot moves again); the actual
+  // joints. StopRun when the shell's connection looks bad (ShellWatch).
+  JointsDeg recordPoint(const ShellPlan& planned, const PlanStep& step, double point_planned_s);
+  // Fits the shell set that `shell` completes, if it completes one.
+  void completeSet(std::size_t shell_index);
+
+  // The corrective move's target (centring.hpp), or StopRun.
+  JointsDeg corrected(const ShellPlan& shell, const JointsDeg& q, double deflection_mm) const;
+  // Re-plans `shell`'s steps from `from` on, starting at `at`, with the latest model; a point that
+  // is no longer safe to reach is dropped, and said so.
+  void replanFrom(ShellPlan& shell, std::size_t from, const JointsDeg& at, const std::string& why);
+  Sample shellSample(const ShellPlan& shell, const RunContext::Measurement& m) const;
+
+  RunContext& ctx_;
+  FitJob& fits_;
+  RunDir& dir_;
+  const Plan& plan_;
+  const CellConfig& cell_;
+  std::vector<Sample> samples_;                     // every data point of the run
+  std::set<std::tuple<int, double, double>> done_;  // (shell, lat, lon) measured
+  int total_points_ = 0;
+  TimeLeft time_left_;
+  ShellWatch shell_watch_;                           // a connection going bad mid-shell
+  int replans_ = 0;                                  // numbered on from the run's earlier sessions
+  std::chrono::steady_clock::time_point pace_mark_;  // the end of the last point (or prompt)
+  Centring centring_;
+};
+
+}  // namespace robocal::daemon
