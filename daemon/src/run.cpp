@@ -134,11 +134,11 @@ struct RunController::Impl {
     }
   }
   void execute(RunJob job) {
+    if (job.kind == RunJob::kClose) return closeRun(job.run_id);
     shared.abort_requested = false;
     shared.pause_requested = false;
     ctx.forgetLinkFaults();  // what happened between runs is not this run's
     shared.with([](RunData& d) { d.stop_reason.clear(); });
-    if (job.kind == RunJob::kClose) return closeRun(job.run_id);
     std::optional<RunDir> dir;
     try {
       Plan plan = job.plan;

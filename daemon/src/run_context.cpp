@@ -301,6 +301,12 @@ void RunContext::waitDetach(RunDir& dir, int shell, const std::string& message) 
   }
   waitConfirm(dir, prompt, shell);
   setAttachment({});
+  // The reading that moves are watched against (the bar believed detached) is one taken after
+  // the detach: one from before it differs by the deflection the bar had while attached, and
+  // would stop the next move for nothing (seen under load in the faults test).
+  forgetReading();
+  const auto deadline = Clock::now() + fromSeconds(std::min(1.0, config.drivers.bar.stale_after_s));
+  while (!last_reading_ && Clock::now() < deadline) spin(0.01, false);
 }
 
 }  // namespace robocal::daemon

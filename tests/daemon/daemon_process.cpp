@@ -7,6 +7,8 @@
 #include <chrono>
 #include <csignal>
 #include <cstdlib>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -27,6 +29,11 @@ DaemonProcess::DaemonProcess(nlohmann::json config) : config_(std::move(config))
 
 DaemonProcess::~DaemonProcess() {
   stop();
+  // ROBOCAL_KEEP_TEST_DIRS=1 keeps the daemon's folder (its log, runs) to look into a failure.
+  if (const char* keep = std::getenv("ROBOCAL_KEEP_TEST_DIRS"); keep && *keep == '1') {
+    std::fprintf(stderr, "kept %s\n", dir_.c_str());
+    return;
+  }
   std::error_code ec;
   std::filesystem::remove_all(dir_, ec);
 }
