@@ -5,7 +5,8 @@
 
 #include <robocal/formats/error.hpp>
 #include <robocal/proto/client.hpp>
-#include <robocal/proto/sim_operator.hpp>
+#include <robocal/proto/objects.hpp>
+#include <robocal/sim/operator.hpp>
 
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/local/stream_protocol.hpp>
@@ -244,7 +245,8 @@ int watch(const std::vector<std::string>& argv) {
     if (operator_socket.empty() || prompt == answered) return;
     answered = prompt;
     const auto control = [&](const std::string& c) { return cellsimControl(operator_socket, c); };
-    for (const std::string& action : proto::answerPrompt(*client, prompt, control, tok, bar_mm))
+    for (const std::string& action : sim::answerPrompt(
+             *client, proto::parseObject<proto::Prompt>(prompt), control, tok, bar_mm))
       say("(simulated operator: " + action + ")\n");
   };
   int exit_code = 0;
