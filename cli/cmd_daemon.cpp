@@ -5,7 +5,8 @@
 
 #include <robocal/formats/error.hpp>
 #include <robocal/proto/client.hpp>
-#include <robocal/proto/sim_operator.hpp>
+#include <robocal/proto/objects.hpp>
+#include <robocal/sim/operator.hpp>
 
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/local/stream_protocol.hpp>
@@ -55,32 +56,34 @@ std::string token(const Args& args) {
   return t;
 }
 
-// Prints a reply, for a person or (--json) as it came; returns the exit code (1 for ERROR).
+// Prints a reply, for a person (parsed by its class's struct) or (--json) as it came; returns
+// the exit code (1 for ERROR).
 int show(const json& reply, bool as_json) {
-  const std::string cls = reply.value("class", "");
+  const std::string cls = proto::objectClass(reply);
   if (as_json) {
     std::printf("%s\n", reply.dump().c_str());
-  } else if (cls == "ERROR") {
-    std::fprintf(stderr, "robocald: %s\n", reply.value("message", "?").c_str());
-    if (reply.contains("violations"))
-      for (const auto& v : reply["violations"])
-        std::fprintf(stderr, "  %s\n",
-                     v.is_string() ? v.get<std::string>().c_str() : v.dump().c_str());
-  } else if (cls == "ACK") {
-    std::printf("ok: %s%s%s\n", reply.value("cmd", "").c_str(),
-                reply.value("message", "").empty() ? "" : ": ", reply.value("message", "").c_str());
-  } else if (cls == "STATUS") {
-    std::fputs(statusText(reply).c_str(), stdout);
-  } else if (cls == "RESULT") {
-    std::fputs(resultText(reply).c_str(), stdout);
-  } else if (cls == "RUNS") {
-    std::fputs(runsText(reply).c_str(), stdout);
-  } else if (cls == "PLAN") {
-    std::fputs(planText(reply).c_str(), stdout);
+  } else if (cls == proto::Error::kClass) {
+    const auto e = proto::parseObject<proto::Error>(reply);
+    std::fprintf(stderr, "robocald: %s\n", e.message.c_str());
+    for (const std::string& v : e.violations.value_or(std::vector<std::string>{}))
+      std::fprintf(stderr, "  %s\n", v.c_str());
+  } else if (cls == proto::Ack::kClass) {
+    const auto a = proto::parseObject<proto::Ack>(reply);
+    const std::string message = a.message.value_or("");
+    std::printf("ok: %s%s%s\n", proto::cmdName(a.cmd), message.empty() ? "" : ": ",
+                message.c_str());
+  } else if (cls == proto::Status::kClass) {
+    std::fputs(statusText(proto::parseObject<proto::Status>(reply)).c_str(), stdout);
+  } else if (cls == proto::Result::kClass) {
+    std::fputs(resultText(proto::parseObject<proto::Result>(reply)).c_str(), stdout);
+  } else if (cls == proto::Runs::kClass) {
+    std::fputs(runsText(proto::parseObject<proto::Runs>(reply)).c_str(), stdout);
+  } else if (cls == proto::Plan::kClass) {
+    std::fputs(planText(proto::parseObject<proto::Plan>(reply)).c_str(), stdout);
   } else {
     std::printf("%s\n", reply.dump(2).c_str());
   }
-  return cls == "ERROR" ? 1 : 0;
+  return cls == proto::Error::kClass ? 1 : 0;
 }
 
 // The simulated operator: tells robocal-cellsim to move the bar, as a person would.
@@ -110,7 +113,7 @@ int simple(const std::vector<std::string>& argv, const char* cmd, bool with_toke
   auto client = connectTo(args);
   // `start` answers PLAN, then ACK or ERROR: every object up to the final one is shown.
   json reply = client->request(req, 30.0);
-  while (reply.value("class", "") == "PLAN" && std::string(cmd) == "start") {
+  while (proto::objectClass(reply) == proto::Plan::kClass && std::string(cmd) == "start") {
     show(reply, args.flag("json"));
     auto next = client->read(30.0);
     if (!next) throw proto::ClientError("robocald sent no ACK after the PLAN within 30 s");
@@ -218,7 +221,7 @@ int watch(const std::vector<std::string>& argv) {
   client->send({{"cmd", "watch"}, {"enable", true}});
   const auto started = std::chrono::steady_clock::now();
   // In a terminal one live line stays at the bottom: text goes above it, and it is redrawn.
-  json progress;
+  std::optional<proto::Progress> progress;
   std::optional<double> bar;
   bool live_shown = false;
   auto last_draw = started;
@@ -230,21 +233,21 @@ int watch(const std::vector<std::string>& argv) {
     std::fflush(stdout);
   };
   const auto drawLive = [&](bool force) {
-    if (as_json || !tty || progress.is_null()) return;
+    if (as_json || !tty || !progress) return;
     const auto now = std::chrono::steady_clock::now();
     if (!force && now - last_draw < std::chrono::milliseconds(100)) return;
     last_draw = now;
-    std::printf("\r\033[K%s", progressLine(progress, bar).c_str());
+    std::printf("\r\033[K%s", progressLine(*progress, bar).c_str());
     std::fflush(stdout);
     live_shown = true;
   };
-  json answered;  // the simulated operator answers each prompt once
-  const auto onPrompt = [&](const json& prompt) {
+  std::optional<proto::Prompt> answered;  // the simulated operator answers each prompt once
+  const auto onPrompt = [&](const proto::Prompt& prompt) {
     say(promptText(prompt) + "\n");
     if (operator_socket.empty() || prompt == answered) return;
     answered = prompt;
     const auto control = [&](const std::string& c) { return cellsimControl(operator_socket, c); };
-    for (const std::string& action : proto::answerPrompt(*client, prompt, control, tok, bar_mm))
+    for (const std::string& action : sim::answerPrompt(*client, prompt, control, tok, bar_mm))
       say("(simulated operator: " + action + ")\n");
   };
   int exit_code = 0;
@@ -258,35 +261,43 @@ int watch(const std::vector<std::string>& argv) {
     }
     auto obj = client->read(0.5);
     if (!obj) continue;
-    const std::string cls = obj->value("class", "");
+    const std::string cls = proto::objectClass(*obj);
     if (as_json) std::printf("%s\n", obj->dump().c_str());
-    if (cls == "BAR") {
-      if (obj->contains("deflection_mm")) bar = (*obj)["deflection_mm"].get<double>();
+    if (cls == proto::Bar::kClass) {
+      if (const auto b = proto::parseObject<proto::Bar>(*obj); b.deflection_mm)
+        bar = b.deflection_mm;
       drawLive(false);
       continue;
     }
-    if (cls == "STATUS") {  // on attach: where the run is, and any prompt that waits
-      progress = *obj;
-      say(stateText({{"to", obj->value("state", "?")}, {"reason", obj->value("reason", "")}}));
-      if (obj->contains("prompt") && (*obj)["prompt"].is_object()) onPrompt((*obj)["prompt"]);
-    } else if (cls == "PROGRESS") {
-      progress = *obj;
-    } else if (cls == "STATE") {
-      say(stateText(*obj));
-    } else if (cls == "PROMPT") {
-      onPrompt(*obj);
-    } else if (cls == "RESULT") {
-      say("\nRESULT\n" + resultText(*obj));
-    } else if (cls == "ERROR") {
+    std::optional<proto::RunState> reached;  // a STATE's `to`
+    if (cls == proto::Status::kClass) {  // on attach: where the run is, and any prompt that waits
+      const auto s = proto::parseObject<proto::Status>(*obj);
+      progress = s.progress();
+      say(stateText(s.state, s.reason));
+      if (s.prompt) onPrompt(*s.prompt);
+    } else if (cls == proto::Progress::kClass) {
+      progress = proto::parseObject<proto::Progress>(*obj);
+    } else if (cls == proto::State::kClass) {
+      const auto st = proto::parseObject<proto::State>(*obj);
+      say(stateText(st));
+      reached = st.to;
+    } else if (cls == proto::Prompt::kClass) {
+      onPrompt(proto::parseObject<proto::Prompt>(*obj));
+    } else if (cls == proto::Result::kClass) {
+      say("\nRESULT\n" + resultText(proto::parseObject<proto::Result>(*obj)));
+    } else if (cls == proto::Error::kClass) {
       say("");
-      std::fprintf(stderr, "robocald: %s\n", obj->value("message", "").c_str());
-    } else if (cls == "EVENT" && obj->value("event", "") == "connection_check" &&
-               !obj->value("ok", true)) {
-      say("connection check failed on shell " + std::to_string(obj->value("shell", 0)) + "\n");
+      std::fprintf(stderr, "robocald: %s\n",
+                   proto::parseObject<proto::Error>(*obj).message.c_str());
+    } else if (cls == proto::Event::kClass) {
+      const auto e = proto::parseObject<proto::Event>(*obj);
+      if (e.event == "connection_check" && !e.details.value("ok", true))
+        say("connection check failed on shell " + std::to_string(e.details.value("shell", 0)) +
+            "\n");
     }
     drawLive(true);
-    if (cls == "STATE" && until.count(obj->value("to", ""))) {
-      exit_code = obj->value("to", "") == "done" ? 0 : 4;
+    if (reached && until.count(proto::runStateName(*reached))) {
+      exit_code = *reached == proto::RunState::kDone ? 0 : 4;
       break;
     }
     std::fflush(stdout);

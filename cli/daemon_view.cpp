@@ -17,10 +17,10 @@ std::string format(const char* fmt, double a) {
 }
 
 // "ball 1 to chuck 3 with the 150 mm extension" / "... without extension".
-std::string connectionWords(const json& p) {
-  std::string s = "ball " + std::to_string(p.value("ball", 0)) + " to chuck " +
-                  std::to_string(p.value("chuck", 0));
-  const double ext = p.value("extension_mm", 0.0);
+std::string connectionWords(const proto::Prompt& p) {
+  std::string s = "ball " + std::to_string(p.ball.value_or(0)) + " to chuck " +
+                  std::to_string(p.chuck.value_or(0));
+  const double ext = p.extension_mm.value_or(0.0);
   return s + (ext > 0 ? " with the " + format("%g", ext) + " mm extension" : " without extension");
 }
 
@@ -42,95 +42,98 @@ std::string clockText(double seconds) {
   return buf;
 }
 
-std::string promptText(const json& p) {
-  const int shell = p.value("shell", 0);
-  const std::string action = p.value("action", "");
+std::string promptText(const proto::Prompt& p) {
+  const int shell = p.shell;
   const std::string shell_opt = shell > 0 ? " --shell " + std::to_string(shell) : "";
   std::vector<std::string> lines;
-  if (action == "connect") {
-    lines = {"OPERATOR: CONNECT THE BALL-BAR   (shell " + std::to_string(shell) + ")",
-             "",
-             "Connect " + connectionWords(p) + ".",
-             "",
-             "Then type:            robocal confirm" + shell_opt,
-             "If it will not seat:  robocal nudge --mm D" + shell_opt,
-             "                      (D mm along the bar, + away from the chuck)"};
-  } else if (action == "detach") {
-    lines = {shell > 0
-                 ? "OPERATOR: DETACH THE BALL-BAR   (before shell " + std::to_string(shell) + ")"
-                 : "OPERATOR: THE RUN IS COMPLETE: DETACH THE BALL-BAR",
-             ""};
-    lines.push_back(p.contains("ball") ? "Take the bar off (" + connectionWords(p) + ")."
-                                       : "Take the bar off the robot.");
-    lines.insert(lines.end(), {"Nothing moves until you confirm.", "",
-                               "Then type:  robocal confirm" + shell_opt});
-  } else {
-    lines = {"OPERATOR: " + p.value("message", "?"), "", "Then type:  robocal confirm" + shell_opt};
+  switch (p.action) {
+    case proto::PromptAction::kConnect:
+      lines = {"OPERATOR: CONNECT THE BALL-BAR   (shell " + std::to_string(shell) + ")",
+               "",
+               "Connect " + connectionWords(p) + ".",
+               "",
+               "Then type:            robocal confirm" + shell_opt,
+               "If it will not seat:  robocal nudge --mm D" + shell_opt,
+               "                      (D mm along the bar, + away from the chuck)"};
+      break;
+    case proto::PromptAction::kDetach:
+      lines = {shell > 0
+                   ? "OPERATOR: DETACH THE BALL-BAR   (before shell " + std::to_string(shell) + ")"
+                   : "OPERATOR: THE RUN IS COMPLETE: DETACH THE BALL-BAR",
+               ""};
+      lines.push_back(p.ball ? "Take the bar off (" + connectionWords(p) + ")."
+                             : "Take the bar off the robot.");
+      lines.insert(lines.end(), {"Nothing moves until you confirm.", "",
+                                 "Then type:  robocal confirm" + shell_opt});
+      break;
   }
   return boxed(lines);
 }
 
-std::string stateText(const json& e) {
-  const std::string to = e.value("to", "?");
+std::string stateText(const proto::State& e) {
+  return stateText(e.to, e.reason);
+}
+
+std::string stateText(proto::RunState to_state, const std::string& reason) {
+  const std::string to = proto::runStateName(to_state);
   std::string out = "state: " + to;
-  if (!e.value("reason", "").empty()) out += " - " + e.value("reason", "");
+  if (!reason.empty()) out += " - " + reason;
   out += "\n";
-  if (to == "paused" || to == "interrupted")
+  if (to_state == proto::RunState::kPaused || to_state == proto::RunState::kInterrupted)
     out += "  The robot is stopped. To continue: robocal resume    To end the run: robocal abort\n";
-  else if (to == "error")
+  else if (to_state == proto::RunState::kError)
     out += "  Nothing is moving. Fix the cause above, then: robocal start\n";
   return out;
 }
 
-std::string progressLine(const json& p, std::optional<double> bar_mm) {
-  const int done = p.value("points_done", 0), total = p.value("points_total", 0);
+std::string progressLine(const proto::Progress& p, std::optional<double> bar_mm) {
+  const int done = p.points_done, total = p.points_total;
   constexpr int kWidth = 20;
   const int filled = total > 0 ? std::clamp(kWidth * done / total, 0, kWidth) : 0;
   std::string line = "[" + std::string(filled, '#') + std::string(kWidth - filled, '.') + "] " +
                      std::to_string(done) + "/" + std::to_string(total) + "  shell " +
-                     std::to_string(p.value("shell", 0)) + "/" +
-                     std::to_string(p.value("shells", 0));
-  if (!p.value("connection", "").empty()) line += " " + p.value("connection", "");
-  line += "  left " + clockText(p.value("eta_s", 0.0));
+                     std::to_string(p.shell) + "/" + std::to_string(p.shells);
+  if (!p.connection.empty()) line += " " + p.connection;
+  line += "  left " + clockText(p.eta_s);
   if (bar_mm) line += "  bar " + format("%+.3f mm", *bar_mm);
   return line;
 }
 
-std::string statusText(const json& s) {
-  std::string out = stateText({{"to", s.value("state", "?")}, {"reason", s.value("reason", "")}});
-  if (!s.value("run", "").empty()) {
-    out += "run: " + s.value("run", "") + "\n";
-    const std::string state = s.value("state", "");
-    const bool over = state == "done" || state == "aborted" || state == "idle";
-    if (s.value("points_total", 0) > 0 && !over) out += progressLine(s, std::nullopt) + "\n";
+std::string statusText(const proto::Status& s) {
+  std::string out = stateText(s.state, s.reason);
+  if (!s.run.empty()) {
+    out += "run: " + s.run + "\n";
+    const bool over = s.state == proto::RunState::kDone || s.state == proto::RunState::kAborted ||
+                      s.state == proto::RunState::kIdle;
+    if (s.points_total > 0 && !over) out += progressLine(s.progress(), std::nullopt) + "\n";
   }
-  if (s.contains("devices")) {
-    const json& d = s["devices"];
-    const auto device = [&](const char* name, const char* key, const char* error_key) {
-      std::string line = std::string(name) + (d.value(key, false) ? "connected" : "NOT connected");
-      if (d.contains(error_key)) line += " (" + d.value(error_key, "") + ")";
-      return line + "\n";
-    };
-    out += device("VAL II controller: ", "val", "val_error");
-    out += device("ball-bar reader:   ", "bar", "bar_error");
-  }
-  if (s.contains("bar") && s["bar"].contains("deflection_mm"))
-    out += "bar: " + format("%+.4f mm deflection", s["bar"]["deflection_mm"].get<double>()) + "\n";
-  if (s.value("bar_attached", false))
+  const auto device = [](const char* name, bool connected,
+                         const std::optional<std::string>& error) {
+    std::string line = std::string(name) + (connected ? "connected" : "NOT connected");
+    if (error) line += " (" + *error + ")";
+    return line + "\n";
+  };
+  out += device("VAL II controller: ", s.devices.val, s.devices.val_error);
+  out += device("ball-bar reader:   ", s.devices.bar, s.devices.bar_error);
+  if (s.bar && s.bar->deflection_mm)
+    out += "bar: " + format("%+.4f mm deflection", *s.bar->deflection_mm) + "\n";
+  if (s.bar_attached)
     out += "the ball-bar may be attached to the robot: the next run asks to detach it first\n";
-  if (!s.value("resumable", "").empty())
-    out += "resumable run: " + s.value("resumable", "") + " (robocal resume)\n";
-  if (s.contains("clients")) out += "clients: " + s["clients"].dump() + "\n";
-  if (s.contains("prompt") && s["prompt"].is_object()) out += promptText(s["prompt"]);
+  if (!s.resumable.empty()) out += "resumable run: " + s.resumable + " (robocal resume)\n";
+  out += "clients: " + std::to_string(s.clients) + "\n";
+  if (s.prompt) out += promptText(*s.prompt);
   return out;
 }
 
-std::string resultText(const json& r) {
-  if (!r.value("available", true)) return r.value("message", "no fit yet") + "\n";
+// RESULT: the run's fields are typed; the fit's (as `robocal solve --json`) are read from `fit`.
+std::string resultText(const proto::Result& result) {
+  if (!result.available)
+    return (result.message.empty() ? std::string("no fit yet") : result.message) + "\n";
+  const json& r = result.fit;
   std::ostringstream out;
-  out << "run " << r.value("run", "?") << ", set " << r.value("set", 0) << " ("
-      << format("%g", r.value("extension_mm", 0.0)) << " mm extension): " << r.value("n", 0)
-      << " samples, rank " << r.value("rank", 0) << " of " << r.value("parameters", 54) << "\n";
+  out << "run " << result.run << ", set " << result.set << " (" << format("%g", result.extension_mm)
+      << " mm extension): " << r.value("n", 0) << " samples, rank " << r.value("rank", 0) << " of "
+      << r.value("parameters", 54) << "\n";
   out << "  fit RMS " << format("%.4f", r.value("rms_mm", 0.0)) << " mm (nominal model "
       << format("%.4f", r.value("rms_before_mm", 0.0)) << " mm), max "
       << format("%.4f", r.value("max_abs_residual_mm", 0.0)) << " mm\n";
@@ -150,33 +153,29 @@ std::string resultText(const json& r) {
       out << "  NOT USABLE AS IS: " << (p.is_string() ? p.get<std::string>() : p.dump()) << "\n";
   if (r.contains("outliers") && !r["outliers"].empty())
     out << "  outliers: " << r["outliers"].size() << "\n";
-  out << "  calibrated model: " << r.value("calibrated_file", "?") << "\n";
-  out << "  report: " << r.value("report_dir", "?") << "\n";
+  out << "  calibrated model: " << result.calibrated_file << "\n";
+  out << "  report: " << result.report_dir << "\n";
   return out.str();
 }
 
-std::string runsText(const json& r) {
-  if (!r.contains("runs") || r["runs"].empty()) return "no runs yet\n";
+std::string runsText(const proto::Runs& r) {
+  if (r.runs.empty()) return "no runs yet\n";
   std::string out = "run                    status       reason\n";
-  for (const json& run : r["runs"]) {
+  for (const proto::RunEntry& run : r.runs) {
     char buf[96];
-    std::snprintf(buf, sizeof buf, "%-22s %-12s ", run.value("run", "?").c_str(),
-                  run.value("status", "?").c_str());
-    out += buf + run.value("reason", "") + "\n";
+    std::snprintf(buf, sizeof buf, "%-22s %-12s ", run.run.c_str(), run.status.c_str());
+    out += buf + run.reason + "\n";
   }
   return out;
 }
 
-std::string planText(const json& p) {
+std::string planText(const proto::Plan& p) {
   std::ostringstream out;
-  out << "plan (" << p.value("source", "?") << "): " << p.value("shells", 0) << " shells, "
-      << p.value("points", 0) << " points, " << p.value("vias", 0) << " vias, "
-      << p.value("dropped", 0) << " dropped; robot time " << clockText(p.value("duration_s", 0.0))
+  out << "plan (" << p.source << "): " << p.shells << " shells, " << p.points << " points, "
+      << p.vias << " vias, " << p.dropped << " dropped; robot time " << clockText(p.duration_s)
       << "\n";
-  if (p.contains("rank"))
-    out << "  rank " << p.value("rank", 0) << ", condition number "
-        << format("%.0f", p.value("condition_number", 0.0)) << ", largest deviation from a shell "
-        << format("%.2f", p.value("max_deviation_mm", 0.0)) << " mm\n";
+  out << "  rank " << p.rank << ", condition number " << format("%.0f", p.condition_number)
+      << ", largest deviation from a shell " << format("%.2f", p.max_deviation_mm) << " mm\n";
   return out.str();
 }
 

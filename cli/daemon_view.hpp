@@ -1,9 +1,10 @@
 // How robocal shows robocald's objects to a person: plain text for a terminal or a log, one
 // function per class (STATUS, PROMPT, STATE, PROGRESS, RESULT, RUNS, PLAN). Each names the command
-// the operator types next where there is one. Pure formatting: no I/O; `--json` bypasses it all.
+// the operator types next where there is one. Pure formatting of the objects as proto/objects.hpp
+// parses them: no I/O; `--json` bypasses it all.
 #pragma once
 
-#include <nlohmann/json.hpp>
+#include <robocal/proto/objects.hpp>
 
 #include <optional>
 #include <string>
@@ -14,18 +15,19 @@ namespace robocal::cli {
 std::string clockText(double seconds);
 
 // The pending prompt in large, plain words in a box, with the commands to type.
-std::string promptText(const nlohmann::json& prompt);
+std::string promptText(const proto::Prompt& prompt);
 
 // A STATE change ("state: paused - <reason>") and, where the run waits for the operator, what to
 // type next.
-std::string stateText(const nlohmann::json& state_event);
+std::string stateText(const proto::State& state_event);
+std::string stateText(proto::RunState to, const std::string& reason);
 
 // The live line: `[#####.....] 25/108  shell 3/9 B1C3  left 0:03:25  bar +0.090 mm`.
-std::string progressLine(const nlohmann::json& progress, std::optional<double> bar_mm);
+std::string progressLine(const proto::Progress& progress, std::optional<double> bar_mm);
 
-std::string statusText(const nlohmann::json& status);
-std::string resultText(const nlohmann::json& result);
-std::string runsText(const nlohmann::json& runs);
-std::string planText(const nlohmann::json& plan);
+std::string statusText(const proto::Status& status);
+std::string resultText(const proto::Result& result);
+std::string runsText(const proto::Runs& runs);
+std::string planText(const proto::Plan& plan);
 
 }  // namespace robocal::cli

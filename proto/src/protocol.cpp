@@ -1,5 +1,7 @@
 #include <robocal/proto/protocol.hpp>
 
+#include <robocal/proto/objects.hpp>
+
 #include <array>
 #include <cmath>
 #include <utility>
@@ -137,16 +139,11 @@ std::string frame(const json& object) {
 }
 
 json versionObject(const std::string& release) {
-  return {{"class", "VERSION"},
-          {"release", release},
-          {"proto_major", kProtoMajor},
-          {"proto_minor", kProtoMinor}};
+  return toJson(Version{release});
 }
 
 json errorObject(const std::string& message, const std::string& cmd) {
-  json e = {{"class", "ERROR"}, {"message", message}};
-  if (!cmd.empty()) e["cmd"] = cmd;
-  return e;
+  return toJson(Error{message, cmd.empty() ? std::nullopt : std::optional<std::string>(cmd), {}});
 }
 
 const char* barKindName(BarKind kind) {
@@ -196,9 +193,7 @@ bool isBusy(RunState state) {
 }
 
 json ackObject(Cmd cmd, const std::string& message) {
-  json a = {{"class", "ACK"}, {"cmd", cmdName(cmd)}};
-  if (!message.empty()) a["message"] = message;
-  return a;
+  return toJson(Ack{cmd, message.empty() ? std::nullopt : std::optional<std::string>(message)});
 }
 
 }  // namespace robocal::proto

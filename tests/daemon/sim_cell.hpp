@@ -7,7 +7,7 @@
 #include "../drivers/cellsim_process.hpp"
 #include "daemon_process.hpp"
 
-#include <robocal/proto/sim_operator.hpp>
+#include <robocal/sim/operator.hpp>
 
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
@@ -69,8 +69,9 @@ struct Cell {
       if (seen && (*o)["class"] != "BAR") seen->push_back(*o);
       const std::string cls = (*o)["class"];
       if (cls == "PROMPT" && !(mistake && mistake(c, *o)))
-        proto::answerPrompt(
-            c, *o, [&](const std::string& cmd) { return sim->control(cmd); }, daemon->token(), 150);
+        sim::answerPrompt(
+            c, proto::parseObject<proto::Prompt>(*o),
+            [&](const std::string& cmd) { return sim->control(cmd); }, daemon->token(), 150);
       if (cls == "STATE" && states.count((*o)["to"])) return (*o)["to"];
     }
     return "";

@@ -10,7 +10,7 @@
 #include <robocal/formats/model_json.hpp>
 #include <robocal/formats/samples_csv.hpp>
 #include <robocal/planner/plan_json.hpp>
-#include <robocal/proto/sim_operator.hpp>
+#include <robocal/sim/operator.hpp>
 #include <robocal/solver/calibrate.hpp>
 
 #include <fstream>

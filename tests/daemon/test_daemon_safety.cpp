@@ -135,9 +135,9 @@ TEST_CASE("a bar left attached by an aborted run is detached before the next run
   CHECK((*prompt)["ball"] == 1);
   for (const json& o : seen) CHECK_FALSE((o["class"] == "STATE" && o["to"] == "moving"));
   CHECK(cell.sim->status("moving") == "0");
-  proto::answerPrompt(
-      *c, *prompt, [&](const std::string& cmd) { return cell.sim->control(cmd); },
-      cell.daemon->token(), 150);
+  sim::answerPrompt(
+      *c, proto::parseObject<proto::Prompt>(*prompt),
+      [&](const std::string& cmd) { return cell.sim->control(cmd); }, cell.daemon->token(), 150);
   REQUIRE(cell.operate(*c, {"done", "paused", "error"}, 240) == "done");
   // It ended with the bar confirmed off: the daemon says so, and a third run starts by moving.
   CHECK(c->request({{"cmd", "status"}}, 10, "STATUS")["bar_attached"] == false);

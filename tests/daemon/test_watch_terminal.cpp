@@ -119,9 +119,9 @@ TEST_CASE("robocal watch in a terminal and piped, at a prompt and while measurin
   TerminalProgram watch({binDir() + "/robocal", "watch", "--port", port});
   CHECK(watch.waitForScreen(std::regex("OPERATOR: CONNECT THE BALL-BAR"), 10));
   CHECK(watch.waitForScreen(std::regex("Then type: +robocal confirm --shell 1"), 10));
-  proto::answerPrompt(
-      *c, *prompt, [&](const std::string& cmd) { return cell.sim->control(cmd); },
-      cell.daemon->token(), 150);
+  sim::answerPrompt(
+      *c, proto::parseObject<proto::Prompt>(*prompt),
+      [&](const std::string& cmd) { return cell.sim->control(cmd); }, cell.daemon->token(), 150);
   const std::regex live(
       R"(\n\[[#.]{20}\] [1-9][0-9]*/[0-9]+  shell 1/1 B1C1  left [0-9]+:[0-9]{2}:[0-9]{2}  bar [+-][0-9]\.[0-9]{3} mm\n$)");
   const bool measuring = watch.waitForScreen(std::regex("state: measuring - shell 1 B1C1"), 30);

@@ -1,7 +1,7 @@
 // robocald's client protocol (docs/protocol.md): newline-delimited JSON objects over TCP, in the
 // manner of gpsd. The server greets with a VERSION object; every server object has a "class";
 // every request has a "cmd". This module knows only the wire format: parsing and validating
-// requests, and building the server's objects. No sockets.
+// requests, and building the server's objects (objects.hpp: one struct per class). No sockets.
 #pragma once
 
 #include <nlohmann/json.hpp>

@@ -1,20 +1,22 @@
-#include <robocal/proto/sim_operator.hpp>
+#include <robocal/sim/operator.hpp>
 
 #include <cstdio>
 
-namespace robocal::proto {
+namespace robocal::sim {
 
-std::vector<std::string> answerPrompt(Client& client, const nlohmann::json& prompt,
+using proto::ClientError;
+
+std::vector<std::string> answerPrompt(proto::Client& client, const proto::Prompt& prompt,
                                       const CellsimControl& control, const std::string& token,
                                       double bar_mm) {
   std::vector<std::string> actions;
-  const int shell = prompt.value("shell", 0);
+  const int shell = prompt.shell;
   std::string command = "connect none";
-  if (prompt.value("action", "") == "connect") {
+  if (prompt.action == proto::PromptAction::kConnect) {
     char buf[160];
     std::snprintf(buf, sizeof buf, "connect B%dC%d extension_mm=%g bar_mm=%g",
-                  prompt.value("ball", 0), prompt.value("chuck", 0),
-                  prompt.value("extension_mm", 0.0), bar_mm);
+                  prompt.ball.value_or(0), prompt.chuck.value_or(0),
+                  prompt.extension_mm.value_or(0.0), bar_mm);
     command = buf;
   }
   for (int attempt = 0;; ++attempt) {
@@ -31,13 +33,16 @@ std::vector<std::string> answerPrompt(Client& client, const nlohmann::json& prom
     while (true) {
       const auto o = client.read(30.0);
       if (!o) throw ClientError("robocald did not carry out the nudge within 30 s");
-      if (o->value("class", "") == "ERROR")
-        throw ClientError("robocald refused the nudge: " + o->value("message", ""));
-      if (o->value("class", "") == "EVENT" && o->value("event", "") == "nudged") break;
+      const std::string cls = proto::objectClass(*o);
+      if (cls == proto::Error::kClass)
+        throw ClientError("robocald refused the nudge: " +
+                          proto::parseObject<proto::Error>(*o).message);
+      if (cls == proto::Event::kClass && proto::parseObject<proto::Event>(*o).event == "nudged")
+        break;
     }
   }
   client.send({{"cmd", "confirm"}, {"shell", shell}, {"token", token}});
   return actions;
 }
 
-}  // namespace robocal::proto
+}  // namespace robocal::sim
