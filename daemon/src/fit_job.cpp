@@ -50,51 +50,52 @@ void FitJob::launch(RunDir dir, std::vector<Sample> samples, double set_extensio
                  samples.size());
     fitted = std::move(samples);
   }
-  running_ = std::async(std::launch::async, [this, dir, fitted = std::move(fitted),
-                                             set_extension_mm, set_index, previous,
-                                             previous_set]() mutable {
-    try {
-      AssessOptions options;  // robocal solve's defaults
-      if (previous) {
-        HeldOutSamples held{{},
-                            previous,
-                            "set " + std::to_string(set_index) + " predicted by the set-" +
-                                std::to_string(previous_set) + " fit"};
-        for (const Sample& s : fitted)
-          if (std::abs(s.extension_mm - set_extension_mm) < 1e-6) held.samples.push_back(s);
-        if (!held.samples.empty()) options.validation = std::move(held);
-      }
-      const FitAssessment fit = assessFit(nominal_, std::move(fitted), options);
-      const std::string name = "set" + std::to_string(set_index);
-      const std::string model_file = dir.file("calibrated-" + name + ".json");
-      const Model calibrated = calibratedModel(fit, {dir.id(), {dir.file("samples.csv")}});
-      saveModelFile(model_file, calibrated);
-      writeReport(dir.file("report-" + name), fit, calibrated);
-      json result = fitSummaryJson(fit);
-      result["run"] = dir.id();
-      result["set"] = set_index;
-      result["extension_mm"] = set_extension_mm;
-      result["calibrated_file"] = model_file;
-      result["report_dir"] = dir.file("report-" + name);
-      result["samples_file"] = dir.file("samples.csv");
-      if (fit.validation)  // kept for clients of protocol 1.0; validation_* say the same
-        result["prediction"] = {{"n", fit.validation->stats.count},
-                                {"rms_mm", fit.validation->stats.rms_mm},
-                                {"max_abs_mm", fit.validation->stats.max_abs_mm}};
-      dir.writeJson("result-" + name + ".json", result);
-      dir.logEvent({{"event", "result"},
-                    {"set", set_index},
-                    {"rms_mm", fit.fit.after.rms_mm},
-                    {"problems", fit.problems}});
-      for (const std::string& problem : fit.problems)
-        spdlog::warn("set {} fit not usable as a calibration: {}", set_index, problem);
-      shared_.with([&](RunData& d) { d.last_result = result; });
-      publish_(result, false);
-    } catch (const std::exception& e) {
-      spdlog::error("solver failed: {}", e.what());
-      publish_({{"class", "ERROR"}, {"message", std::string("solver failed: ") + e.what()}}, false);
-    }
-  });
+  running_ =
+      std::async(std::launch::async, [this, dir, fitted = std::move(fitted), set_extension_mm,
+                                      set_index, previous, previous_set]() mutable {
+        try {
+          AssessOptions options;  // robocal solve's defaults
+          if (previous) {
+            HeldOutSamples held{{},
+                                previous,
+                                "set " + std::to_string(set_index) + " predicted by the set-" +
+                                    std::to_string(previous_set) + " fit"};
+            for (const Sample& s : fitted)
+              if (std::abs(s.extension_mm - set_extension_mm) < 1e-6) held.samples.push_back(s);
+            if (!held.samples.empty()) options.validation = std::move(held);
+          }
+          const FitAssessment fit = assessFit(nominal_, std::move(fitted), options);
+          const std::string name = "set" + std::to_string(set_index);
+          const std::string model_file = dir.file("calibrated-" + name + ".json");
+          const Model calibrated = calibratedModel(fit, {dir.id(), {dir.file("samples.csv")}});
+          saveModelFile(model_file, calibrated);
+          writeReport(dir.file("report-" + name), fit, calibrated);
+          json result = fitSummaryJson(fit);
+          result["run"] = dir.id();
+          result["set"] = set_index;
+          result["extension_mm"] = set_extension_mm;
+          result["calibrated_file"] = model_file;
+          result["report_dir"] = dir.file("report-" + name);
+          result["samples_file"] = dir.file("samples.csv");
+          if (fit.validation)  // kept for clients of protocol 1.0; validation_* say the same
+            result["prediction"] = {{"n", fit.validation->stats.count},
+                                    {"rms_mm", fit.validation->stats.rms_mm},
+                                    {"max_abs_mm", fit.validation->stats.max_abs_mm}};
+          dir.writeJson("result-" + name + ".json", result);
+          dir.logEvent({{"event", "result"},
+                        {"set", set_index},
+                        {"rms_mm", fit.fit.after.rms_mm},
+                        {"problems", fit.problems}});
+          for (const std::string& problem : fit.problems)
+            spdlog::warn("set {} fit not usable as a calibration: {}", set_index, problem);
+          shared_.with([&](RunData& d) { d.last_result = result; });
+          publish_(result, false);
+        } catch (const std::exception& e) {
+          spdlog::error("solver failed: {}", e.what());
+          publish_(proto::toJson(proto::Error{std::string("solver failed: ") + e.what(), {}, {}}),
+                   false);
+        }
+      });
 }
 
 }  // namespace robocal::daemon

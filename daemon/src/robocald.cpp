@@ -52,19 +52,21 @@ robocal group when the daemon runs in it, as under the unit). Once it listens it
 "listening ADDRESS PORT".
 )";
 
-json planObject(const Plan& plan, const std::string& source) {
+proto::Plan planSummary(const Plan& plan, const std::string& source) {
   const auto& s = plan.summary;
-  return {{"class", "PLAN"},
-          {"source", source},
-          {"shells", s.shells},
-          {"points", s.points},
-          {"vias", s.vias},
-          {"dropped", s.dropped},
-          {"duration_s", s.duration_s},
-          {"rank", s.rank},
-          {"condition_number", s.condition_number},
-          {"max_deviation_mm", s.max_deviation_mm},
-          {"predicted_deflection_mm", s.predicted_deflection_mm}};
+  return {source,
+          s.shells,
+          s.points,
+          s.vias,
+          s.dropped,
+          s.duration_s,
+          s.rank,
+          s.condition_number,
+          s.max_deviation_mm,
+          s.predicted_deflection_mm};
+}
+json planObject(const Plan& plan, const std::string& source) {
+  return proto::toJson(planSummary(plan, source));
 }
 
 class Daemon {
@@ -127,7 +129,7 @@ class Daemon {
         break;
       case proto::Cmd::kWatch:
         hub_.setWatching(id, req.watch_enable);
-        hub_.send(id, {{"class", "WATCH"}, {"enable", req.watch_enable}});
+        hub_.send(id, proto::toJson(proto::Watch{req.watch_enable}));
         if (req.watch_enable) hub_.send(id, status());
         break;
       case proto::Cmd::kResult:
@@ -169,10 +171,10 @@ class Daemon {
 
   // The run's STATUS with what the daemon itself knows: its clients and its plan.
   json status() const {
-    json s = run_.status();
-    s["clients"] = hub_.clientCount();
-    s["plan"] = plan_ ? planObject(*plan_, plan_source_) : json();
-    return s;
+    proto::Status s = run_.status();
+    s.clients = static_cast<int>(hub_.clientCount());
+    if (plan_) s.plan = planSummary(*plan_, plan_source_);
+    return proto::toJson(s);
   }
 
   // Loads or makes a plan on a worker thread (planning takes up to seconds), then replies on the

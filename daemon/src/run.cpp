@@ -179,7 +179,7 @@ struct RunController::Impl {
     } catch (const std::exception& e) {
       stopped(dir, {StopRun::kFault, std::string("error: ") + e.what()});
     }
-    shared.with([](RunData& d) { d.prompt = nullptr; });
+    shared.with([](RunData& d) { d.prompt.reset(); });
   }
 
   // The safety check of the plan the run follows; on violations the run ends before anything
@@ -191,10 +191,10 @@ struct RunController::Impl {
     for (const auto& v : violations) list.push_back(describeViolation(v));
     dir.logEvent({{"event", "plan_rejected"}, {"violations", list}});
     recordRunState(dir, {{"status", "aborted"}, {"reason", "plan failed the safety check"}});
-    ctx.publish({{"class", "ERROR"},
-                 {"message", std::to_string(violations.size()) +
-                                 " safety violations in the plan; nothing moved"},
-                 {"violations", list}},
+    ctx.publish(proto::toJson(proto::Error{std::to_string(violations.size()) +
+                                               " safety violations in the plan; nothing moved",
+                                           {},
+                                           list.get<std::vector<std::string>>()}),
                 false);
     ctx.setState(RunState::kError,
                  "plan failed the safety check: " + describeViolation(violations.front()));
@@ -234,26 +234,26 @@ struct RunController::Impl {
     ctx.setState(RunState::kAborted, "run " + id + " closed: " + reason);
   }
 
-  json statusObject() const {
+  proto::Status statusObject() const {
     return shared.with([](const RunData& d) {
-      json s = {{"class", "STATUS"},
-                {"state", proto::runStateName(d.state)},
-                {"reason", d.state_reason},
-                {"run", d.run_id},
-                {"shell", d.shell_number},
-                {"shells", d.shells_total},
-                {"points_done", d.points_done},
-                {"points_total", d.points_total},
-                {"eta_s", d.eta_s},
-                {"connection", d.connection_name},
-                {"bar_attached", d.attachment.maybe_attached},
-                {"devices", {{"val", d.devices.val_connected}, {"bar", d.devices.bar_connected}}}};
-      if (!d.devices.val_error.empty()) s["devices"]["val_error"] = d.devices.val_error;
-      if (!d.devices.bar_error.empty()) s["devices"]["bar_error"] = d.devices.bar_error;
-      // Every field is always there: null (or "") when there is nothing.
-      s["resumable"] = d.resumable_id;
-      s["prompt"] = d.prompt;
-      s["bar"] = d.latest_bar;
+      proto::Status s;
+      s.state = d.state;
+      s.reason = d.state_reason;
+      s.run = d.run_id;
+      s.shell = d.shell_number;
+      s.shells = d.shells_total;
+      s.connection = d.connection_name;
+      s.points_done = d.points_done;
+      s.points_total = d.points_total;
+      s.eta_s = d.eta_s;
+      s.bar_attached = d.attachment.maybe_attached;
+      s.devices.val = d.devices.val_connected;
+      s.devices.bar = d.devices.bar_connected;
+      if (!d.devices.val_error.empty()) s.devices.val_error = d.devices.val_error;
+      if (!d.devices.bar_error.empty()) s.devices.bar_error = d.devices.bar_error;
+      s.bar = d.latest_bar;
+      s.prompt = d.prompt;
+      s.resumable = d.resumable_id;
       return s;
     });
   }
@@ -288,7 +288,7 @@ std::string RunController::start(const Plan& plan) {
 
 std::string RunController::confirm(std::optional<int> shell) {
   return impl_->shared.with([&](RunData& d) -> std::string {
-    if (d.prompt.is_null()) return "nothing to confirm: no prompt is pending";
+    if (!d.prompt) return "nothing to confirm: no prompt is pending";
     if (shell && *shell != d.prompt_shell)
       return "the pending prompt is for shell " + std::to_string(d.prompt_shell) + ", not " +
              std::to_string(*shell);
@@ -299,7 +299,7 @@ std::string RunController::confirm(std::optional<int> shell) {
 
 std::string RunController::nudge(std::optional<int> shell, double mm) {
   return impl_->shared.with([&](RunData& d) -> std::string {
-    if (d.prompt.is_null() || d.prompt.value("action", "") != "connect")
+    if (!d.prompt || d.prompt->action != proto::PromptAction::kConnect)
       return "nothing to nudge: no connect prompt is pending";
     if (shell && *shell != d.prompt_shell)
       return "the pending prompt is for shell " + std::to_string(d.prompt_shell);
@@ -358,24 +358,24 @@ RunController::Answer RunController::abort(const std::string& reason) {
   });
 }
 
-nlohmann::json RunController::status() const {
+proto::Status RunController::status() const {
   return impl_->statusObject();
 }
 
 nlohmann::json RunController::result() const {
   return impl_->shared.with([](const RunData& d) -> json {
     if (d.last_result.is_null())
-      return {{"class", "RESULT"}, {"available", false}, {"message", "no fit yet"}};
+      return proto::toJson(
+          proto::Result{false, "no fit yet", {}, 0, 0, {}, {}, {}, json::object()});
     return d.last_result;
   });
 }
 
 nlohmann::json RunController::runs() const {
   return impl_->shared.with([](const RunData& d) {
-    json list = json::array();
-    for (const RunSummary& r : d.runs)
-      list.push_back({{"run", r.run}, {"status", r.status}, {"reason", r.reason}});
-    return json{{"class", "RUNS"}, {"runs", list}};
+    proto::Runs runs;
+    for (const RunSummary& r : d.runs) runs.runs.push_back({r.run, r.status, r.reason});
+    return proto::toJson(runs);
   });
 }
 

@@ -54,18 +54,16 @@ void RunContext::setState(proto::RunState to, const std::string& reason) {
     d.state_reason = reason;
     return was;
   });
-  json ev = {
-      {"class", "STATE"}, {"from", proto::runStateName(from)}, {"to", proto::runStateName(to)}};
-  if (!reason.empty()) ev["reason"] = reason;
   spdlog::info("state {} -> {}{}{}", proto::runStateName(from), proto::runStateName(to),
                reason.empty() ? "" : ": ", reason);
-  publish(ev, false);
+  publish(proto::toJson(proto::State{from, to, reason}), false);
 }
 
 void RunContext::event(RunDir& dir, json ev) {
   dir.logEvent(ev);
-  ev["class"] = "EVENT";
-  publish(ev, false);
+  proto::Event e{ev.value("event", ""), std::move(ev)};
+  e.details.erase("event");
+  publish(proto::toJson(e), false);
 }
 
 std::string RunContext::stopReason(const std::string& fallback) const {
@@ -79,16 +77,14 @@ void RunContext::checkpoint() {
 }
 
 void RunContext::updateProgress(int done, int total, double time_left_s) {
-  const json p = shared.with([&](RunData& d) {
+  const proto::Progress p = shared.with([&](RunData& d) {
     d.points_done = done;
     d.points_total = total;
     d.eta_s = time_left_s;
-    return json{{"class", "PROGRESS"},      {"shell", d.shell_number},
-                {"shells", d.shells_total}, {"connection", d.connection_name},
-                {"points_done", done},      {"points_total", total},
-                {"eta_s", time_left_s}};
+    return proto::Progress{d.shell_number, d.shells_total, d.connection_name,
+                           done,           total,          time_left_s};
   });
-  publish(p, false);
+  publish(proto::toJson(p), false);
 }
 
 // ------------------------------------------------------------------------ devices
@@ -119,16 +115,13 @@ void RunContext::reportLinkFaults(RunDir& dir) {
 void RunContext::onBarLine(const drivers::BarReading& r) {
   last_reading_ = r;
   if (collecting_ && r.kind == drivers::BarLineKind::kReading) window_.push_back(r.value_mm);
-  json b = {{"class", "BAR"},
-            {"seq", r.sequence},
-            {"kind", proto::barKindName(wireKind(r.kind))},
-            {"t_us", monotonicMicros(r.time)}};
+  proto::Bar b{r.sequence, wireKind(r.kind), std::nullopt, std::nullopt, monotonicMicros(r.time)};
   if (r.kind == drivers::BarLineKind::kReading) {
-    b["deflection_mm"] = r.value_mm;
-    if (bar_offset_mm_ > 0) b["length_mm"] = bar_offset_mm_ + r.value_mm;
+    b.deflection_mm = r.value_mm;
+    if (bar_offset_mm_ > 0) b.length_mm = bar_offset_mm_ + r.value_mm;
   }
   shared.with([&](RunData& d) { d.latest_bar = b; });
-  publish(b, true);
+  publish(proto::toJson(b), true);
 }
 
 void RunContext::setAttachment(const BarAttachment& a) {
@@ -256,8 +249,9 @@ RunContext::Measurement RunContext::measureHere(double window_s) {
 
 // ------------------------------------------------------------------------ the operator
 
-void RunContext::waitConfirm(RunDir& dir, json prompt, int shell,
+void RunContext::waitConfirm(RunDir& dir, const proto::Prompt& prompt,
                              const std::function<void(double)>& on_nudge) {
+  const int shell = prompt.shell;
   const int seen = shared.with([&](RunData& d) {
     d.prompt = prompt;
     d.prompt_shell = shell;
@@ -265,15 +259,16 @@ void RunContext::waitConfirm(RunDir& dir, json prompt, int shell,
     d.nudged_mm = 0;
     return d.confirms;
   });
-  setState(proto::RunState::kAwaitingConfirm, prompt.value("message", ""));
-  dir.logEvent({{"event", "prompt"}, {"prompt", prompt}});
-  publish(prompt, false);
+  setState(proto::RunState::kAwaitingConfirm, prompt.message);
+  const json object = proto::toJson(prompt);
+  dir.logEvent({{"event", "prompt"}, {"prompt", object}});
+  publish(object, false);
   while (true) {
     checkpoint();
     std::optional<double> nudge;
     const bool confirmed = shared.with([&](RunData& d) {
       if (d.confirms != seen) {
-        d.prompt = nullptr;
+        d.prompt.reset();
         return true;
       }
       nudge.swap(d.nudge_mm);
@@ -293,20 +288,29 @@ void RunContext::waitConfirm(RunDir& dir, json prompt, int shell,
 void RunContext::waitDetach(RunDir& dir, int shell, const std::string& message) {
   bar_offset_mm_ = 0;
   const BarAttachment was = attachment();
-  json prompt = {{"class", "PROMPT"}, {"action", "detach"}, {"shell", shell}, {"message", message}};
+  proto::Prompt prompt{proto::PromptAction::kDetach, shell, {}, {}, {}, message};
   if (was.ball > 0) {
-    prompt["ball"] = was.ball;
-    prompt["chuck"] = was.chuck;
-    prompt["extension_mm"] = was.extension_mm;
+    prompt.ball = was.ball;
+    prompt.chuck = was.chuck;
+    prompt.extension_mm = was.extension_mm;
   }
-  waitConfirm(dir, prompt, shell);
+  waitConfirm(dir, prompt);
   setAttachment({});
   // The reading that moves are watched against (the bar believed detached) is one taken after
-  // the detach: one from before it differs by the deflection the bar had while attached, and
-  // would stop the next move for nothing (seen under load in the faults test).
+  // the detach, once the readings are steady: one from before it, or still in a buffer when the
+  // operator confirmed, differs by the deflection the bar had while attached and would stop the
+  // next move for nothing (seen under load in the faults test).
   forgetReading();
-  const auto deadline = Clock::now() + fromSeconds(std::min(1.0, config.drivers.bar.stale_after_s));
-  while (!last_reading_ && Clock::now() < deadline) spin(0.01, false);
+  std::optional<double> previous;
+  const auto deadline = Clock::now() + fromSeconds(1.5);
+  while (Clock::now() < deadline) {
+    spin(0.1, false);
+    if (!last_reading_ || last_reading_->kind != drivers::BarLineKind::kReading) continue;
+    if (previous &&
+        std::abs(last_reading_->value_mm - *previous) <= 0.2 * config.detached_change_mm)
+      break;
+    previous = last_reading_->value_mm;
+  }
 }
 
 }  // namespace robocal::daemon

@@ -103,7 +103,7 @@ class RunContext {
   // ---- the operator
   // Publishes the PROMPT and waits for the operator's confirm; `on_nudge` (when given) carries out
   // nudge requests meanwhile.
-  void waitConfirm(RunDir& dir, nlohmann::json prompt, int shell,
+  void waitConfirm(RunDir& dir, const proto::Prompt& prompt,
                    const std::function<void(double)>& on_nudge = {});
   // Asks to detach the bar (shell 0: at the end of the run) and records, once confirmed, that it
   // is off the robot.

@@ -6,6 +6,7 @@
 #include <robocal/daemon/cell_io.hpp>
 #include <robocal/daemon/run_store.hpp>
 #include <robocal/planner/plan.hpp>
+#include <robocal/proto/objects.hpp>
 #include <robocal/proto/protocol.hpp>
 
 #include <nlohmann/json.hpp>
@@ -39,7 +40,7 @@ struct RunData {
   std::string resumable_id;  // a paused or interrupted run
   std::string stop_reason;   // the operator's words for a pause or abort request
   // The operator.
-  nlohmann::json prompt;  // the pending PROMPT, null when none
+  std::optional<proto::Prompt> prompt;  // the pending PROMPT
   int prompt_shell = 0;
   int confirms = 0;                // counts confirm commands; the run waits for a change
   std::optional<double> nudge_mm;  // requested, not yet done
@@ -49,7 +50,7 @@ struct RunData {
   double eta_s = 0;
   std::string connection_name;  // the shell's connection, e.g. "B1C3"
   // Devices and results.
-  nlohmann::json latest_bar;
+  std::optional<proto::Bar> latest_bar;
   nlohmann::json last_result;
   DeviceState devices;
   BarAttachment attachment;      // persisted in <data_dir>/bar.json

@@ -161,14 +161,9 @@ JointsDeg ShellRunner::connect(const ShellPlan& shell) {
                 "to shell " + std::to_string(shell.shell) + "'s connect pose");
   JointsDeg q = ctx_.move(shell.connect.joints_deg, false);
   ctx_.waitConfirm(dir_,
-                   {{"class", "PROMPT"},
-                    {"action", "connect"},
-                    {"shell", shell.shell},
-                    {"ball", c.ball_index + 1},
-                    {"chuck", c.chuck_index + 1},
-                    {"extension_mm", shell.extension_mm},
-                    {"message", connectMessage(shell)}},
-                   shell.shell, [&](double mm) {
+                   proto::Prompt{proto::PromptAction::kConnect, shell.shell, c.ball_index + 1,
+                                 c.chuck_index + 1, shell.extension_mm, connectMessage(shell)},
+                   [&](double mm) {
                      // The bar is not attached yet: the ball moves along the line to the chuck.
                      q = ctx_.move(corrected(shell, q, -mm), false);
                    });
@@ -345,16 +340,11 @@ JointsDeg ShellRunner::recordPoint(const ShellPlan& planned, const PlanStep& ste
   samples_.push_back(s);
   centring_.add(s);
   done_.insert(pointKey(s.shell, s.lat_deg, s.lon_deg));
-  ctx_.publish({{"class", "SAMPLE"},
-                {"shell", s.shell},
-                {"lat_deg", s.lat_deg},
-                {"lon_deg", s.lon_deg},
-                {"joints", std::vector<double>(m.joints_deg.data(), m.joints_deg.data() + 6)},
-                {"length_mm", s.length_mm},
-                {"spread_mm", m.spread_mm},
-                {"readings", m.readings},
-                {"dwell_s", dwell_s}},
-               false);
+  ctx_.publish(
+      proto::toJson(proto::Sample{s.shell, s.lat_deg, s.lon_deg,
+                                  std::vector<double>(m.joints_deg.data(), m.joints_deg.data() + 6),
+                                  s.length_mm, m.spread_mm, static_cast<int>(m.readings), dwell_s}),
+      false);
   const auto now = Clock::now();
   time_left_.pointMeasured(point_planned_s,
                            std::chrono::duration<double>(now - pace_mark_).count());

@@ -151,7 +151,7 @@ TEST_CASE("run states: a whole run, the bar detached at the end, then a second r
   CHECK(prompts[3]["action"] == "detach");
   CHECK(prompts[3]["shell"] == 0);
   CHECK_FALSE(h.cell().attached());
-  CHECK(h.run().status()["bar_attached"] == false);
+  CHECK_FALSE(h.run().status().bar_attached);
   REQUIRE(h.seen("RESULT").size() == 1);
   CHECK(h.seen("RESULT")[0]["set"] == 1);
   CHECK(h.run().runs()["runs"].size() == 1);
@@ -180,7 +180,7 @@ TEST_CASE("run states: a pause at a prompt, a resume, a pause again and a second
   REQUIRE(h.run().start(h.plan()).empty());
   REQUIRE(h.waitState({"paused", "done", "error"}) == "paused");
   CHECK(h.seen("SAMPLE").empty());
-  CHECK(h.run().status()["resumable"] != "");
+  CHECK_FALSE(h.run().status().resumable.empty());
   CHECK_FALSE(h.run().start(h.plan()).empty());  // resume or abort it first
   REQUIRE(h.run().resume("").empty());
   REQUIRE(h.waitState({"paused", "done", "error"}) == "paused");  // paused at its prompt again
@@ -210,7 +210,7 @@ TEST_CASE("run states: aborting a paused run tells the watchers, and it cannot b
   CHECK_FALSE(h.run().abort({}).error.empty());  // nothing left to abort
   h.restart();                                   // and so it stays after a restart
   CHECK(h.run().runs()["runs"][0]["status"] == "aborted");
-  CHECK(h.run().status()["state"] == "idle");
+  CHECK(h.run().status().state == proto::RunState::kIdle);
 }
 
 TEST_CASE("run states: nudges at a connect prompt move the ball, within their limits",

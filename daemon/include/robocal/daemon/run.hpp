@@ -11,6 +11,7 @@
 #include <robocal/daemon/run_store.hpp>
 #include <robocal/kinematics/model.hpp>
 #include <robocal/planner/plan.hpp>
+#include <robocal/proto/objects.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -47,7 +48,8 @@ class RunController {
   };
   Answer abort(const std::string& reason);
 
-  nlohmann::json status() const;  // a STATUS object
+  // The run's STATUS (the daemon adds its clients and plan).
+  proto::Status status() const;
   nlohmann::json result() const;  // the latest RESULT object (or an empty one)
   nlohmann::json runs() const;    // a RUNS object
 
