@@ -11,7 +11,9 @@
 
 #include <array>
 #include <cerrno>
+#include <chrono>
 #include <cstring>
+#include <optional>
 #include <vector>
 
 namespace robocal::daemon {
@@ -27,7 +29,8 @@ struct ClientHub::Client {
   std::string peer;
   std::array<char, 4096> buffer{};
   std::string line;
-  bool discarding = false;  // inside a line that was too long
+  bool discarding = false;                        // inside a line that was too long
+  std::optional<Clock::time_point> line_started;  // the first byte of an unfinished line
   bool watching = false;
   bool writing = false;
   std::size_t front_sent = 0;  // bytes of the first queued line already written
@@ -119,7 +122,9 @@ void ClientHub::read(const std::shared_ptr<Client>& c) {
         }
         for (std::size_t i = 0; i < n && !c->closed; ++i) {
           const char ch = c->buffer[i];
+          if (ch != '\n' && !c->line_started) c->line_started = Clock::now();
           if (ch == '\n') {
+            c->line_started.reset();
             if (c->discarding) {
               c->discarding = false;
               enqueue(c,
@@ -242,6 +247,15 @@ void ClientHub::checkStalls() {
     ++stalled_;
     close(c, "stuck: took nothing for " + std::to_string(limits_.stall_s) + " s");
   }
+  const auto request_timeout = std::chrono::duration<double>(limits_.request_timeout_s);
+  std::vector<std::shared_ptr<Client>> slow;
+  for (const auto& [id, c] : clients_)
+    if (c->line_started && Clock::now() - *c->line_started > request_timeout) slow.push_back(c);
+  for (const auto& c : slow) {
+    ++timed_out_;
+    close(c, "a request line left unfinished for " + std::to_string(limits_.request_timeout_s) +
+                 " s (request_timeout_s)");
+  }
   stall_timer_.expires_after(std::chrono::milliseconds(250));
   stall_timer_.async_wait([this](const boost::system::error_code& ec) {
     if (!ec) checkStalls();
@@ -259,6 +273,7 @@ nlohmann::json ClientHub::stats() const {
   return {{"connected", clients_.size()},
           {"refused", refused_},
           {"stalled", stalled_},
+          {"timed_out", timed_out_},
           {"dropped_lines", dropped_lines_},
           {"clients", per}};
 }

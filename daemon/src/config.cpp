@@ -97,6 +97,7 @@ DaemonConfig daemonConfigFromJson(const json& root, const std::string& source,
   r.integer("max_line_bytes", c.max_line_bytes, 256, 16 * 1024 * 1024);
   r.integer("client_queue_max", c.client_queue_max, 16, 1000000);
   r.number("client_stall_s", c.client_stall_s, 0.1, 3600);
+  r.number("request_timeout_s", c.request_timeout_s, 0.1, 3600);
   r.path("log_file", c.log_file);
   r.string("log_level", c.log_level);
   r.number("watchdog_interval_s", c.watchdog_interval_s, 0, 3600);

@@ -69,6 +69,16 @@ json planObject(const Plan& plan, const std::string& source) {
   return proto::toJson(planSummary(plan, source));
 }
 
+HubLimits hubLimits(const DaemonConfig& c) {
+  HubLimits limits;
+  limits.max_clients = c.max_clients;
+  limits.max_line_bytes = c.max_line_bytes;
+  limits.queue_max = c.client_queue_max;
+  limits.stall_s = c.client_stall_s;
+  limits.request_timeout_s = c.request_timeout_s;
+  return limits;
+}
+
 class Daemon {
  public:
   Daemon(asio::io_context& io, DaemonConfig config)
@@ -78,9 +88,7 @@ class Daemon {
         cell_(config_.cell.empty() ? std::nullopt : std::optional(loadCellFile(config_.cell))),
         token_(loadOrCreateToken(config_.token_file)),
         hub_(
-            io,
-            {config_.max_clients, config_.max_line_bytes, config_.client_queue_max,
-             config_.client_stall_s},
+            io, hubLimits(config_),
             [this](ClientHub::ClientId id, const std::string& line) { onLine(id, line); },
             [] { return proto::versionObject(build::kVersion); }),
         run_(config_, nominal_, cell_, [this](json object, bool droppable) {
@@ -173,6 +181,7 @@ class Daemon {
   json status() const {
     proto::Status s = run_.status();
     s.clients = static_cast<int>(hub_.clientCount());
+    s.client_counts = hub_.counts();
     if (plan_) s.plan = planSummary(*plan_, plan_source_);
     return proto::toJson(s);
   }

@@ -468,6 +468,11 @@ json toJson(const Status& o) {
           {"prompt", nullOr(o.prompt)},
           {"resumable", o.resumable},
           {"clients", o.clients},
+          {"client_counts",
+           {{"refused", o.client_counts.refused},
+            {"stalled", o.client_counts.stalled},
+            {"timed_out", o.client_counts.timed_out},
+            {"dropped_lines", o.client_counts.dropped_lines}}},
           {"plan", nullOr(o.plan)}};
 }
 template <>
@@ -493,6 +498,9 @@ Status parseObject<Status>(const json& j) {
   s.prompt = r.nested<Prompt>("prompt", true);
   s.resumable = r.string("resumable");
   s.clients = r.integer("clients");
+  const Reader cc = r.part(r.object("client_counts"), "client_counts");
+  s.client_counts = {*cc.optInteger("refused", true), *cc.optInteger("stalled", true),
+                     *cc.optInteger("timed_out", true), *cc.optInteger("dropped_lines", true)};
   s.plan = r.nested<Plan>("plan", true);
   return s;
 }

@@ -30,6 +30,7 @@ json daemonConfig(const CellSimProcess& cell, const std::string& dir, int max_cl
           {"max_line_bytes", 1024},
           {"client_queue_max", 64},
           {"client_stall_s", 1.0},
+          {"request_timeout_s", 1.0},
           {"drivers", drivers}};
 }
 
@@ -118,6 +119,39 @@ TEST_CASE("many clients: past max_clients new ones are refused, the others are s
   }
   CHECK(refused == 3);
   for (auto& c : clients) CHECK(c->request({{"cmd", "status"}})["class"] == "STATUS");
+  CHECK(clients[0]->request({{"cmd", "status"}})["client_counts"]["refused"] == 3);
+}
+
+TEST_CASE("a client that leaves a request line unfinished is disconnected; the others go on") {
+  Fixture f;
+  auto slow = f.daemon->client();
+  auto other = f.daemon->client();
+  // One byte every 0.3 s: never a whole line, past request_timeout_s (1 s here).
+  const std::string partial = R"({"cmd":"status")";
+  bool closed = false;
+  for (std::size_t i = 0; i < partial.size() && !closed; ++i) {
+    try {
+      slow->sendRaw(partial.substr(i, 1));
+      std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    } catch (const proto::ClientError&) {
+      closed = true;
+    }
+  }
+  // Closed: the rest of the line and a request get no answer.
+  bool answered = false;
+  try {
+    slow->sendRaw("}\n");
+    answered = slow->read(2.0).has_value();
+  } catch (const proto::ClientError&) {
+  }
+  CHECK_FALSE(answered);
+  const json s = other->request({{"cmd", "status"}});
+  CHECK(s["client_counts"]["timed_out"] == 1);
+  CHECK(s["clients"] == 1);
+  // A line sent whole, however slowly the client thinks between lines, is served.
+  auto patient = f.daemon->client();
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  CHECK(patient->request({{"cmd", "status"}})["class"] == "STATUS");
 }
 
 TEST_CASE("a watcher that never reads changes nothing for the others") {

@@ -7,6 +7,8 @@
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/asio/steady_timer.hpp>
 
+#include <robocal/proto/objects.hpp>
+
 #include <nlohmann/json.hpp>
 
 #include <chrono>
@@ -27,6 +29,9 @@ struct HubLimits {
   // is in flight, so a client whose window has closed is seen as stalled (its queue stops moving)
   // after ~this many bytes rather than after the kernel's auto-tuned send buffer (MBs) fills.
   int unsent_max_bytes = 16 * 1024;
+  // A request line begun and not ended this long (a client sending a byte now and then, or a
+  // line cut off): the client is disconnected.
+  double request_timeout_s = 10.0;
 };
 
 class ClientHub {
@@ -47,7 +52,8 @@ class ClientHub {
   void broadcast(const nlohmann::json& object, bool droppable);
   void setWatching(ClientId client, bool watching);
   std::size_t clientCount() const { return clients_.size(); }
-  nlohmann::json stats() const;
+  nlohmann::json stats() const;  // per client, and the counts below
+  proto::ClientCounts counts() const { return {refused_, stalled_, timed_out_, dropped_lines_}; }
 
  private:
   struct Client;
@@ -67,7 +73,7 @@ class ClientHub {
   boost::asio::steady_timer stall_timer_;
   std::map<ClientId, std::shared_ptr<Client>> clients_;
   ClientId next_id_ = 1;
-  long refused_ = 0, stalled_ = 0, dropped_lines_ = 0;
+  long refused_ = 0, stalled_ = 0, dropped_lines_ = 0, timed_out_ = 0;
 };
 
 }  // namespace robocal::daemon

@@ -38,6 +38,7 @@ struct DaemonConfig {
   std::size_t max_line_bytes = 16 * 1024;
   std::size_t client_queue_max = 4096;  // messages queued to one client; past it readings drop
   double client_stall_s = 5.0;          // a client that takes nothing this long is disconnected
+  double request_timeout_s = 10.0;      // a request line unfinished this long: disconnected
   std::string log_file;                 // optional, besides stderr (journald)
   std::string log_level = "info";       // trace, debug, info, warn, error
   double watchdog_interval_s = 0;       // 0: from $WATCHDOG_USEC when systemd sets it

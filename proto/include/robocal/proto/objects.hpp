@@ -209,6 +209,16 @@ struct Devices {
   std::optional<std::string> bar_error;
   bool operator==(const Devices&) const = default;
 };
+// What the daemon's client side has had to do since it started (ClientHub): connections refused
+// (too many), closed as stuck, closed for an unfinished request line, BAR lines dropped for slow
+// clients.
+struct ClientCounts {
+  std::int64_t refused = 0;
+  std::int64_t stalled = 0;
+  std::int64_t timed_out = 0;
+  std::int64_t dropped_lines = 0;
+  bool operator==(const ClientCounts&) const = default;
+};
 struct Status {
   static constexpr const char* kClass = "STATUS";
   RunState state = RunState::kIdle;
@@ -226,6 +236,7 @@ struct Status {
   std::optional<Prompt> prompt;  // the pending PROMPT
   std::string resumable;         // a paused or interrupted run's id, "" when none
   int clients = 0;
+  ClientCounts client_counts;
   std::optional<Plan> plan;  // the daemon's current PLAN
   bool operator==(const Status&) const = default;
   // The progress part of a STATUS, as a PROGRESS object would carry it.
