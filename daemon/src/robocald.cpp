@@ -164,7 +164,7 @@ class Daemon {
         reply(run_.nudge(req.shell, req.nudge_mm), "moving the ball");
         break;
       case proto::Cmd::kPause:
-        reply(run_.pause(req.reason), "pausing at the next step");
+        reply(run_.pause(req.reason), "stopping the robot; `resume` continues the run");
         break;
       case proto::Cmd::kResume:
         reply(run_.resume(req.run_id), "resuming");
