@@ -1,11 +1,9 @@
 #include <robocal/kinematics/kinematics.hpp>
 
-#include <numbers>
+#include <robocal/kinematics/units.hpp>
 
 namespace robocal {
 namespace {
-
-constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 
 Eigen::Isometry3d rotZ(double angle_rad) {
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();

@@ -1,5 +1,7 @@
 #include <robocal/planner/puma_ik.hpp>
 
+#include <robocal/kinematics/units.hpp>
+
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -8,8 +10,6 @@ namespace robocal {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
-constexpr double kRadPerDeg = kPi / 180.0;
-constexpr double kDegPerRad = 180.0 / kPi;
 // Closed-form quantities closer than this to a singularity make the configuration undefined.
 constexpr double kSingularEps = 1e-9;
 // How far (deg) a link rotation of the model may be from the PUMA's alpha.
