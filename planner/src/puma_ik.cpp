@@ -232,7 +232,7 @@ IkSolution PumaIk::refine(const Eigen::Isometry3d& tool_pose, const ArmConfig& c
 
 IkSolution PumaIk::solve(const Eigen::Isometry3d& tool_pose, const ArmConfig& config,
                          const JointsDeg* near) const {
-  const IkSolution cf = closedForm(tool_pose, config, near);
+  IkSolution cf = closedForm(tool_pose, config, near);
   if (cf.status == IkStatus::kUnreachable || cf.status == IkStatus::kSingular) return cf;
   if (cf.position_error_mm < 1e-6 && cf.angle_error_deg < 1e-8) return cf;  // exact DH model
   IkSolution s = refine(tool_pose, config, cf.joints_deg);
