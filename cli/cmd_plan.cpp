@@ -7,6 +7,7 @@
 #include <robocal/planner/plan_json.hpp>
 #include <robocal/sim/measurements.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 
@@ -62,6 +63,7 @@ int run(const std::vector<std::string>& argv) {
   sigmas.gain = u.gain_sigma;
   std::mt19937_64 rng(static_cast<std::uint64_t>(u.seed));
   std::vector<Model> truths;
+  truths.reserve(static_cast<std::size_t>(std::max(0, u.models)));
   for (int i = 0; i < u.models; ++i) truths.push_back(perturbModel(model, sigmas, rng));
   predictDeflections(model, truths, plan);
   savePlanFile(out, plan);

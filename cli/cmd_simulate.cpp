@@ -39,12 +39,12 @@ perturbed (or a given truth), poses on each connection's shell found with the no
 )";
 
 int run(const std::vector<std::string>& argv) {
-  const Args args(argv,
-                  {"model", "truth", "seed", "noise-mm", "quantum-deg", "connections", "bar-mm",
-                   "extension-mm", "points-per-shell", "first-shell", "sigma-translation-mm",
-                   "sigma-link-angle-deg", "sigma-offset-deg", "sigma-gain", "out", "truth-out",
-                   "plan"},
-                  {"help"});
+  const Args args(
+      argv,
+      {"model", "truth", "seed", "noise-mm", "quantum-deg", "connections", "bar-mm", "extension-mm",
+       "points-per-shell", "first-shell", "sigma-translation-mm", "sigma-link-angle-deg",
+       "sigma-offset-deg", "sigma-gain", "out", "truth-out", "plan"},
+      {"help"});
   if (args.flag("help")) {
     std::fputs(kHelp, stdout);
     return 0;

@@ -1,6 +1,7 @@
 #include "centring.hpp"
 
 #include <robocal/kinematics/kinematics.hpp>
+#include <robocal/kinematics/units.hpp>
 #include <robocal/planner/check.hpp>
 #include <robocal/solver/calibrate.hpp>
 
@@ -8,13 +9,8 @@
 
 #include <cmath>
 #include <limits>
-#include <numbers>
 
 namespace robocal::daemon {
-namespace {
-constexpr double kRadPerDeg = std::numbers::pi / 180.0;
-}  // namespace
-
 Centring::Centring(const Model& nominal, const CellConfig& cell, bool enabled,
                    std::vector<Sample> samples)
     : nominal_(nominal), cell_(cell), enabled_(enabled), samples_(std::move(samples)) {

@@ -14,68 +14,32 @@ BarReader::BarReader(boost::asio::io_context& io, BarConfig config)
 }
 
 BarReader::~BarReader() {
-  alive_.reset();
-  link_.close();
+  link_.close();  // orphans the pending read: no handler runs after this
 }
 
 void BarReader::connect() {
-  link_.close();
-  alive_ = std::make_shared<int>(0);  // orphans handlers of the previous connection
-  reading_ = false;
-  link_.open();
+  link_.open();  // closes the previous connection first, orphaning its handlers
   disconnected_ = false;
   disconnect_reason_.clear();
   splitter_.clear();
-  arm();
+  link_.receive([this](std::string_view bytes) { received(bytes); },
+                [this](const std::string& why) {
+                  dropPartial();
+                  disconnected_ = true;
+                  ++stats_.disconnects;
+                  disconnect_reason_ = link_.disconnected(why).what();
+                });
 }
 
 void BarReader::reconnect(double within_s) {
-  const auto deadline = deadlineAfter(within_s);
-  std::string last = "not tried";
-  while (true) {
-    try {
-      connect();
-      return;
-    } catch (const PortError& e) {
-      last = e.what();
-    }
-    if (Clock::now() >= deadline)
-      throw PortError("could not reconnect to the ball-bar reader within " +
-                      formatFixed(within_s, 1) + " s: " + last);
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  }
+  reconnectWithin(within_s, "the ball-bar reader", [this] { connect(); });
 }
 
 void BarReader::disconnect() {
-  alive_.reset();
   link_.close();
-  reading_ = false;
 }
 
-void BarReader::arm() {
-  if (reading_ || !link_.isOpen()) return;
-  reading_ = true;
-  std::weak_ptr<int> alive = alive_;
-  link_.stream().async_read_some(boost::asio::buffer(buffer_),
-                                 [this, alive](const boost::system::error_code& ec, std::size_t n) {
-                                   if (alive.expired()) return;
-                                   reading_ = false;
-                                   if (ec == boost::asio::error::operation_aborted) return;
-                                   if (ec) {
-                                     dropPartial();
-                                     disconnected_ = true;
-                                     ++stats_.disconnects;
-                                     disconnect_reason_ = link_.disconnected(ec.message()).what();
-                                     return;
-                                   }
-                                   // Keep receiving even if the onLine callback throws.
-                                   const std::string bytes(buffer_.data(), n);
-                                   arm();
-                                   received(bytes);
-                                 });
-}
-
-void BarReader::received(const std::string& bytes) {
+void BarReader::received(std::string_view bytes) {
   std::vector<std::string> lines;
   splitter_.feed(bytes, lines);
   for (const auto& l : lines) handleLine(l);
@@ -155,7 +119,7 @@ BarReading BarReader::read() {
       link_.write(dialect_.pollCommandBytes(), deadlineAfter(c.poll_timeout_s));
       attempt_deadline = std::min(stale_deadline, deadlineAfter(c.poll_timeout_s));
     }
-    arm();  // a no-op while the receive loop runs
+    link_.resumeReceiving();  // a no-op while the receive loop runs
     if (!runIoUntil(
             io_, [&] { return sequence_ != start || disconnected_; }, attempt_deadline) &&
         Clock::now() < attempt_deadline)

@@ -1,6 +1,7 @@
 #include <robocal/drivers/config.hpp>
 #include <robocal/drivers/errors.hpp>
 #include <robocal/drivers/protocol.hpp>
+#include <robocal/jsonread/strict_json.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -14,69 +15,12 @@ namespace {
 
 using nlohmann::json;
 
-// Reads members of one JSON object, naming the key path in every error, and rejects unknown keys
-// (a misspelt key would otherwise silently keep its default).
-class ObjectReader {
- public:
-  ObjectReader(const json& object, std::string where) : object_(object), where_(std::move(where)) {
-    if (!object_.is_object()) throw ConfigError(where_ + ": expected a JSON object");
-  }
-  std::string path(const std::string& key) const { return where_ + "." + key; }
-
-  void get(const std::string& key, std::string& out) {
-    read(key, out, "a string", &json::is_string);
-  }
-  void get(const std::string& key, bool& out) {
-    read(key, out, "true or false", &json::is_boolean);
-  }
-  void get(const std::string& key, double& out) { read(key, out, "a number", &json::is_number); }
-  void get(const std::string& key, int& out) {
-    const json* v = find(key);
-    if (!v) return;
-    if (!v->is_number_integer()) throw ConfigError(path(key) + ": expected a whole number");
-    out = v->get<int>();
-  }
-  void get(const std::string& key, std::vector<std::string>& out) {
-    const json* v = find(key);
-    if (!v) return;
-    if (!v->is_array()) throw ConfigError(path(key) + ": expected a list of strings");
-    std::vector<std::string> values;
-    for (std::size_t i = 0; i < v->size(); ++i) {
-      if (!(*v)[i].is_string())
-        throw ConfigError(path(key) + "[" + std::to_string(i) + "]: expected a string");
-      values.push_back((*v)[i].get<std::string>());
-    }
-    out = values;
-  }
-  const json* child(const std::string& key) { return find(key); }
-
-  void finish() const {
-    for (const auto& item : object_.items()) {
-      const std::string& key = item.key();
-      if (used_.count(key)) continue;
-      throw ConfigError(path(key) + ": unknown key");
-    }
-  }
-
- private:
-  const json* find(const std::string& key) {
-    used_.insert(key);
-    auto it = object_.find(key);
-    return it == object_.end() ? nullptr : &*it;
-  }
-  template <typename T>
-  void read(const std::string& key, T& out, const char* expected,
-            bool (json::*check)() const noexcept) {
-    const json* v = find(key);
-    if (!v) return;
-    if (!((*v).*check)()) throw ConfigError(path(key) + ": expected " + expected);
-    out = v->get<T>();
-  }
-
-  const json& object_;
-  std::string where_;
-  std::set<std::string> used_;
-};
+// The drivers' sections, each read with its path as the source ("val.serial"); the caller
+// (driversConfigFromJson) names the file.
+using ObjectReader = jsonread::Object<ConfigError>;
+ObjectReader objectReader(const json& object, const std::string& where) {
+  return ObjectReader(jsonread::Reader<ConfigError>(""), object, where);
+}
 
 void checkRegex(const std::string& pattern, const std::string& key, int min_captures) {
   try {
@@ -108,7 +52,7 @@ std::string barPresetRegex(const std::string& format) {
 
 SerialConfig serialConfigFromJson(const json& j, const std::string& where) {
   SerialConfig c;
-  ObjectReader r(j, where);
+  ObjectReader r = objectReader(j, where);
   r.get("path", c.path);
   r.get("usb_serial", c.usb_serial);
   r.get("usb_description", c.usb_description);
@@ -135,8 +79,8 @@ SerialConfig serialConfigFromJson(const json& j, const std::string& where) {
 
 ValConfig valConfigFromJson(const json& j, const std::string& where) {
   ValConfig c;
-  ObjectReader r(j, where);
-  if (const json* s = r.child("serial")) c.serial = serialConfigFromJson(*s, where + ".serial");
+  ObjectReader r = objectReader(j, where);
+  if (const json* s = r.find("serial")) c.serial = serialConfigFromJson(*s, where + ".serial");
   r.get("prompt", c.prompt);
   r.get("send_line_ending", c.send_line_ending);
   r.get("move_joints_command", c.move_joints_command);
@@ -217,8 +161,8 @@ void validate(const ValConfig& c, const std::string& where) {
 
 BarConfig barConfigFromJson(const json& j, const std::string& where) {
   BarConfig c;
-  ObjectReader r(j, where);
-  if (const json* s = r.child("serial")) c.serial = serialConfigFromJson(*s, where + ".serial");
+  ObjectReader r = objectReader(j, where);
+  if (const json* s = r.find("serial")) c.serial = serialConfigFromJson(*s, where + ".serial");
   r.get("format", c.format);
   r.get("value_regex", c.value_regex);
   r.get("unit_scale_mm", c.unit_scale_mm);
@@ -261,9 +205,9 @@ void validate(const BarConfig& c, const std::string& where) {
 DriversConfig driversConfigFromJson(const json& j, const std::string& source) {
   DriversConfig c;
   try {
-    ObjectReader r(j, source);
-    if (const json* v = r.child("val")) c.val = valConfigFromJson(*v, "val");
-    if (const json* b = r.child("bar")) c.bar = barConfigFromJson(*b, "bar");
+    ObjectReader r(jsonread::Reader<ConfigError>(source), j, "");
+    if (const json* v = r.find("val")) c.val = valConfigFromJson(*v, "val");
+    if (const json* b = r.find("bar")) c.bar = barConfigFromJson(*b, "bar");
     std::string comment;  // free text for people editing the file
     r.get("comment", comment);
     r.finish();

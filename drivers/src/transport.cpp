@@ -18,6 +18,7 @@
 #include <climits>
 #include <cstdlib>
 #include <cstring>
+#include <thread>
 
 namespace robocal::drivers {
 
@@ -310,6 +311,8 @@ void SerialLink::openLibserialport() {
 }
 
 void SerialLink::close() {
+  receive_alive_.reset();  // orphans the pending read of the receive loop
+  reading_ = false;
   boost::system::error_code ec;
   if (stream_.is_open()) {
     stream_.cancel(ec);
@@ -331,6 +334,58 @@ DisconnectedError SerialLink::disconnected(const std::string& why) {
   close();
   return DisconnectedError("lost the connection to " + describe() + " (" + why +
                            "): cable or USB adapter unplugged, or the device powered off");
+}
+
+void SerialLink::receive(std::function<void(std::string_view)> on_bytes,
+                         std::function<void(const std::string&)> on_error) {
+  on_bytes_ = std::move(on_bytes);
+  on_error_ = std::move(on_error);
+  receive_alive_ = std::make_shared<int>(0);
+  reading_ = false;
+  resumeReceiving();
+}
+
+void SerialLink::resumeReceiving() {
+  if (reading_ || !isOpen() || !receive_alive_) return;
+  reading_ = true;
+  std::weak_ptr<int> alive = receive_alive_;
+  stream_.async_read_some(boost::asio::buffer(receive_buffer_),
+                          [this, alive](const boost::system::error_code& ec, std::size_t n) {
+                            if (alive.expired()) return;  // closed, or the link is gone
+                            reading_ = false;
+                            if (ec == boost::asio::error::operation_aborted) return;
+                            if (ec) {
+                              if (on_error_) on_error_(ec.message());
+                              return;
+                            }
+                            const std::string bytes(receive_buffer_.data(), n);
+                            resumeReceiving();
+                            if (on_bytes_) on_bytes_(bytes);
+                          });
+}
+
+void reconnectWithin(double within_s, const std::string& device,
+                     const std::function<void()>& connect,
+                     const std::function<void()>& after_failure) {
+  const auto deadline = deadlineAfter(within_s);
+  std::string last = "not tried";
+  while (true) {
+    try {
+      connect();
+      return;
+    } catch (const PortError& e) {
+      last = e.what();
+    } catch (const DisconnectedError& e) {
+      last = e.what();
+    } catch (const TimeoutError& e) {
+      last = e.what();
+    }
+    if (after_failure) after_failure();
+    if (Clock::now() >= deadline)
+      throw PortError("could not reconnect to " + device + " within " + formatFixed(within_s, 1) +
+                      " s: " + last);
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
 }
 
 void SerialLink::write(std::string_view bytes, Clock::time_point deadline) {

@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <thread>
 
 namespace robocal::drivers {
 
@@ -110,12 +109,18 @@ void ValController::connect() {
   alive_ = std::make_shared<int>(0);
   disconnected_ = false;
   disconnect_reason_.clear();
-  reading_ = false;
   out_of_sync_ = true;  // skip whatever the controller still prints from before
   last_rx_ = Clock::now();
   pending_errors_.clear();
   unsolicited_splitter_.clear();
-  arm();
+  // The link keeps receiving even if a handler called from received() throws (a caller's
+  // progress callback stopping a move).
+  link_.receive(
+      [this](std::string_view bytes) {
+        last_rx_ = Clock::now();
+        received(bytes);
+      },
+      [this](const std::string& why) { lost(why); });
   try {
     command("", dialect_.config().connect_timeout_s);
   } catch (const TimeoutError& e) {
@@ -125,25 +130,8 @@ void ValController::connect() {
 }
 
 void ValController::reconnect(double within_s) {
-  const auto deadline = deadlineAfter(within_s);
-  std::string last = "not tried";
-  while (true) {
-    try {
-      connect();
-      return;
-    } catch (const PortError& e) {
-      last = e.what();
-    } catch (const DisconnectedError& e) {
-      last = e.what();
-    } catch (const TimeoutError& e) {
-      last = e.what();
-    }
-    disconnect();
-    if (Clock::now() >= deadline)
-      throw PortError("could not reconnect to the controller within " + formatFixed(within_s, 1) +
-                      " s: " + last);
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  }
+  reconnectWithin(
+      within_s, "the controller", [this] { connect(); }, [this] { disconnect(); });
 }
 
 void ValController::disconnect() {
@@ -151,7 +139,6 @@ void ValController::disconnect() {
   timer_.cancel();
   poll_timer_.cancel();
   link_.close();
-  reading_ = false;
   const auto fail = [](std::unique_ptr<Exchange>& x) {
     if (x && x->handler)
       x->handler(errorPtr(DisconnectedError("the controller was disconnected")), {});
@@ -161,28 +148,6 @@ void ValController::disconnect() {
   queue_.clear();
   fail(current);
   for (auto& x : queue) fail(x);
-}
-
-void ValController::arm() {
-  if (reading_ || !link_.isOpen()) return;
-  reading_ = true;
-  std::weak_ptr<int> alive = alive_;
-  link_.stream().async_read_some(boost::asio::buffer(buffer_),
-                                 [this, alive](const boost::system::error_code& ec, std::size_t n) {
-                                   if (alive.expired()) return;
-                                   reading_ = false;
-                                   if (ec == boost::asio::error::operation_aborted) return;
-                                   if (ec) {
-                                     lost(ec.message());
-                                     return;
-                                   }
-                                   last_rx_ = Clock::now();
-                                   // Keep receiving even if a handler called from received()
-                                   // throws (a caller's progress callback stopping a move).
-                                   const std::string bytes(buffer_.data(), n);
-                                   arm();
-                                   received(bytes);
-                                 });
 }
 
 void ValController::lost(const std::string& why) {

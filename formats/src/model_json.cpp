@@ -1,5 +1,7 @@
 #include <robocal/formats/model_json.hpp>
 
+#include <robocal/jsonread/strict_json.hpp>
+
 #include <cmath>
 #include <nlohmann/json.hpp>
 
@@ -7,10 +9,6 @@ namespace robocal {
 namespace {
 
 using nlohmann::json;
-
-const char* typeName(const json& j) {
-  return j.type_name();
-}
 
 // A value for an error message: a number or a string as written, an array or object by its size
 // (dumping a deeply nested value recursed once per level and overflowed the stack).
@@ -20,76 +18,48 @@ std::string describe(const json& j) {
   return j.dump();
 }
 
+// The model's vocabulary on the strict reader: required numbers, fixed-size arrays, points, and
+// the provenance's optional members.
 class Reader {
  public:
-  explicit Reader(std::string source) : source_(std::move(source)) {}
+  explicit Reader(const std::string& source) : r_(source) {}
 
   [[noreturn]] void fail(const std::string& where, const std::string& problem) const {
-    throw FormatError(source_ + ": " + where + ": " + problem);
-  }
-
-  const json& member(const json& obj, const std::string& where, const char* key) const {
-    const auto it = obj.find(key);
-    if (it == obj.end()) fail(where.empty() ? key : where + "." + key, "missing");
-    return *it;
+    r_.fail(where, problem);
   }
 
   double number(const json& obj, const std::string& where, const char* key) const {
-    const std::string path = where.empty() ? key : where + "." + key;
-    return numberValue(member(obj, where, key), path);
-  }
-
-  double numberValue(const json& value, const std::string& path) const {
-    if (!value.is_number()) fail(path, std::string("expected a number, got ") + typeName(value));
-    const double v = value.get<double>();
-    if (!std::isfinite(v)) fail(path, "not a finite number");
-    return v;
+    return r_.number(r_.member(obj, where, key), jsonread::keyPath(where, key));
   }
 
   const json& array(const json& obj, const char* key, size_t count) const {
-    const json& a = member(obj, "", key);
-    if (!a.is_array()) fail(key, std::string("expected an array, got ") + typeName(a));
-    if (a.size() != count)
-      fail(key, "expected " + std::to_string(count) + " entries, got " + std::to_string(a.size()));
-    return a;
+    return r_.array(r_.member(obj, "", key), key, count);
   }
 
   const json& object(const json& value, const std::string& path) const {
-    if (!value.is_object()) fail(path, std::string("expected an object, got ") + typeName(value));
-    return value;
+    return r_.object(value, path);
   }
 
   Eigen::Vector3d point(const json& value, const std::string& path) const {
     if (!value.is_array() || value.size() != 3)
       fail(path, "expected [x, y, z] in mm, got " + describe(value));
-    return {numberValue(value[0], path + "[0]"), numberValue(value[1], path + "[1]"),
-            numberValue(value[2], path + "[2]")};
+    return {r_.number(value[0], path + "[0]"), r_.number(value[1], path + "[1]"),
+            r_.number(value[2], path + "[2]")};
   }
 
   std::string optionalString(const json& obj, const std::string& where, const char* key,
                              std::string fallback) const {
     const auto it = obj.find(key);
-    if (it == obj.end()) return fallback;
-    if (!it->is_string())
-      fail(where + "." + key, std::string("expected a string, got ") + typeName(*it));
-    return it->get<std::string>();
+    return it == obj.end() ? fallback : r_.string(*it, jsonread::keyPath(where, key));
   }
 
   std::vector<std::string> optionalStrings(const json& obj, const std::string& where,
                                            const char* key) const {
-    std::vector<std::string> out;
     const auto it = obj.find(key);
-    if (it == obj.end()) return out;
-    const std::string path = where + "." + key;
-    if (!it->is_array()) fail(path, std::string("expected an array, got ") + typeName(*it));
-    for (size_t i = 0; i < it->size(); ++i) {
-      const json& v = (*it)[i];
-      if (!v.is_string())
-        fail(path + "[" + std::to_string(i) + "]",
-             std::string("expected a string, got ") + typeName(v));
-      out.push_back(v.get<std::string>());
-    }
-    return out;
+    if (it == obj.end()) return {};
+    const std::string path = jsonread::keyPath(where, key);
+    r_.array(*it, path);
+    return r_.strings(*it, path);
   }
 
   // A whole number from 0 to `max`; 0 when the key is absent.
@@ -97,9 +67,10 @@ class Reader {
                           long long max) const {
     const auto it = obj.find(key);
     if (it == obj.end()) return 0;
-    const double v = numberValue(*it, where + "." + key);
+    const std::string path = jsonread::keyPath(where, key);
+    const double v = r_.number(*it, path);
     if (v < 0 || v > static_cast<double>(max) || v != std::floor(v))
-      fail(where + "." + key, "expected a whole number from 0 to " + std::to_string(max));
+      fail(path, "expected a whole number from 0 to " + std::to_string(max));
     return static_cast<long long>(v);
   }
 
@@ -108,7 +79,7 @@ class Reader {
   }
 
  private:
-  std::string source_;
+  jsonread::Reader<FormatError> r_;
 };
 
 ModelProvenance provenanceFromJson(const Reader& r, const json& value) {

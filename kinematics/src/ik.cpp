@@ -1,12 +1,10 @@
 #include <robocal/kinematics/ik.hpp>
 
+#include <robocal/kinematics/units.hpp>
+
 #include <Eigen/LU>
-#include <numbers>
 
 namespace robocal {
-namespace {
-constexpr double kDegPerRad = 180.0 / std::numbers::pi;
-}
 
 std::optional<JointsDeg> solveIk(const Kinematics& kin, const Eigen::Isometry3d& target,
                                  const JointsDeg& seed, const IkOptions& opt) {

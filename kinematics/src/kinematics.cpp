@@ -1,11 +1,9 @@
 #include <robocal/kinematics/kinematics.hpp>
 
-#include <numbers>
+#include <robocal/kinematics/units.hpp>
 
 namespace robocal {
 namespace {
-
-constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 
 Eigen::Isometry3d rotZ(double angle_rad) {
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
@@ -60,7 +58,7 @@ Eigen::Vector3d Kinematics::ballPositionJacobian(const JointsDeg& readings,
                                                  const Eigen::Vector3d& ball_mm,
                                                  PositionJacobian& jac) const {
   const auto frames = chainFrames(readings);
-  const Eigen::Vector3d ball = frames.back() * ball_mm;
+  Eigen::Vector3d ball = frames.back() * ball_mm;
   // A parameter that rotates the chain about an axis through point o moves the ball by
   // axis x (ball - o); a translation moves it along the translated axis.
   for (int k = 0; k < kLinkCount; ++k) {

@@ -1,13 +1,12 @@
 #include <robocal/kinematics/model.hpp>
 
+#include <robocal/kinematics/units.hpp>
+
 #include <cmath>
-#include <numbers>
 
 namespace robocal {
 namespace {
 
-constexpr double kRadPerDeg = std::numbers::pi / 180.0;
-constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 constexpr std::array<const char*, kLinkParamCount> kLinkKeys = {"x", "y", "z", "rz", "ry", "rx"};
 constexpr std::array<const char*, kJointParamCount> kJointKeys = {"offset", "gain"};
 constexpr int kBlock = kLinkParamCount + kJointParamCount;

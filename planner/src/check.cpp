@@ -1,13 +1,13 @@
 #include <robocal/planner/check.hpp>
 
+#include <robocal/kinematics/units.hpp>
+
 #include <cmath>
 #include <cstdio>
-#include <numbers>
 
 namespace robocal {
 namespace {
 
-constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 constexpr double kPlaceToleranceMm = 1.0;  // ball vs the step's stated lat/lon
 
 std::string ruleOf(const std::string& problem) {

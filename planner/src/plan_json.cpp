@@ -1,6 +1,8 @@
 #include <robocal/planner/cell_json.hpp>
 #include <robocal/planner/plan_json.hpp>
 
+#include <robocal/jsonread/strict_json.hpp>
+
 #include <cmath>
 #include <nlohmann/json.hpp>
 
@@ -28,39 +30,24 @@ ordered_json stepToJson(const PlanStep& s) {
   return j;
 }
 
+// The plan's vocabulary on the strict reader: members that must be there, steps, counts.
 class Reader {
  public:
-  explicit Reader(std::string source) : source_(std::move(source)) {}
+  explicit Reader(const std::string& source) : r_(source) {}
   [[noreturn]] void fail(const std::string& key, const std::string& problem) const {
-    throw FormatError(source_ + ": " + key + ": " + problem);
+    r_.fail(key, problem);
   }
   const json& member(const json& obj, const std::string& where, const char* key) const {
-    if (!obj.is_object()) fail(where, std::string("expected an object, got ") + obj.type_name());
-    const auto it = obj.find(key);
-    if (it == obj.end()) fail(where.empty() ? key : where + "." + key, "missing");
-    return *it;
+    return r_.member(obj, where, key);
   }
   double number(const json& obj, const std::string& where, const char* key) const {
-    const json& v = member(obj, where, key);
-    const std::string path = where.empty() ? key : where + "." + key;
-    if (!v.is_number()) fail(path, std::string("expected a number, got ") + v.type_name());
-    const double d = v.get<double>();
-    if (!std::isfinite(d)) fail(path, "not a finite number");
-    return d;
+    return r_.number(member(obj, where, key), jsonread::keyPath(where, key));
   }
   const json& array(const json& obj, const std::string& where, const char* key) const {
-    const json& v = member(obj, where, key);
-    if (!v.is_array())
-      fail(where.empty() ? key : where + "." + key,
-           std::string("expected an array, got ") + v.type_name());
-    return v;
+    return r_.array(member(obj, where, key), jsonread::keyPath(where, key));
   }
   std::string string(const json& obj, const std::string& where, const char* key) const {
-    const json& v = member(obj, where, key);
-    if (!v.is_string())
-      fail(where.empty() ? key : where + "." + key,
-           std::string("expected a string, got ") + v.type_name());
-    return v.get<std::string>();
+    return r_.string(member(obj, where, key), jsonread::keyPath(where, key));
   }
   // A step; the connect pose has no "kind" (it is a point). No copy of `j` is made: copying a
   // deeply nested value recursed once per level and overflowed the stack.
@@ -76,11 +63,8 @@ class Reader {
     }
     const json& q = array(j, where, "joints_deg");
     if (q.size() != kJointCount) fail(where + ".joints_deg", "expected 6 joint readings in deg");
-    for (int k = 0; k < kJointCount; ++k) {
-      if (!q[k].is_number() || !std::isfinite(q[k].get<double>()))
-        fail(where + ".joints_deg[" + std::to_string(k) + "]", "expected a finite number");
-      s.joints_deg[k] = q[k].get<double>();
-    }
+    for (int k = 0; k < kJointCount; ++k)
+      s.joints_deg[k] = r_.number(q[k], jsonread::indexPath(where + ".joints_deg", k));
     s.lat_deg = number(j, where, "lat_deg");
     s.lon_deg = number(j, where, "lon_deg");
     return s;
@@ -91,13 +75,12 @@ class Reader {
     if (!obj.contains(key)) return fallback;
     const double v = number(obj, where, key);
     if (v != std::floor(v) || v < 0 || v > 1e9)
-      fail(where.empty() ? key : where + "." + key, "expected a whole number from 0");
+      fail(jsonread::keyPath(where, key), "expected a whole number from 0");
     return static_cast<int>(v);
   }
-  const std::string& source() const { return source_; }
 
  private:
-  std::string source_;
+  jsonread::Reader<FormatError> r_;
 };
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include <robocal/planner/plan.hpp>
 
 #include <robocal/kinematics/ik.hpp>
+#include <robocal/kinematics/units.hpp>
 #include <robocal/solver/identifiability.hpp>
 #include <robocal/solver/problem.hpp>
 
@@ -18,8 +19,6 @@ namespace robocal {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
-constexpr double kRadPerDeg = kPi / 180.0;
-constexpr double kDegPerRad = 180.0 / kPi;
 // The planner aims below the tolerance so that a re-check (which samples the same way) has room.
 constexpr double kPlannerToleranceFraction = 0.9;
 constexpr int kMaxBisections = 10;      // 2^10 vias at most between two data points

@@ -1,5 +1,7 @@
 #include <robocal/planner/puma_ik.hpp>
 
+#include <robocal/kinematics/units.hpp>
+
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -8,8 +10,6 @@ namespace robocal {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
-constexpr double kRadPerDeg = kPi / 180.0;
-constexpr double kDegPerRad = 180.0 / kPi;
 // Closed-form quantities closer than this to a singularity make the configuration undefined.
 constexpr double kSingularEps = 1e-9;
 // How far (deg) a link rotation of the model may be from the PUMA's alpha.
@@ -232,7 +232,7 @@ IkSolution PumaIk::refine(const Eigen::Isometry3d& tool_pose, const ArmConfig& c
 
 IkSolution PumaIk::solve(const Eigen::Isometry3d& tool_pose, const ArmConfig& config,
                          const JointsDeg* near) const {
-  const IkSolution cf = closedForm(tool_pose, config, near);
+  IkSolution cf = closedForm(tool_pose, config, near);
   if (cf.status == IkStatus::kUnreachable || cf.status == IkStatus::kSingular) return cf;
   if (cf.position_error_mm < 1e-6 && cf.angle_error_deg < 1e-8) return cf;  // exact DH model
   IkSolution s = refine(tool_pose, config, cf.joints_deg);

@@ -5,6 +5,7 @@
 #include <robocal/formats/model_json.hpp>
 #include <robocal/kinematics/kinematics.hpp>
 #include <robocal/kinematics/sample.hpp>
+#include <robocal/kinematics/units.hpp>
 
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/local/stream_protocol.hpp>
@@ -26,7 +27,6 @@
 #include <functional>
 #include <istream>
 #include <memory>
-#include <numbers>
 #include <random>
 #include <regex>
 #include <sstream>
@@ -456,7 +456,7 @@ class Cell {
     JointsDeg j;
     for (int i = 0; i < 6; ++i) j[i] = joints_[i];
     const Eigen::Isometry3d pose = kin_.toolPose(j);
-    const Eigen::Vector3d oat = pose.linear().eulerAngles(2, 1, 2) * (180.0 / std::numbers::pi);
+    const Eigen::Vector3d oat = pose.linear().eulerAngles(2, 1, 2) * kDegPerRad;
     const Eigen::Vector3d p = pose.translation();
     return {p.x(), p.y(), p.z(), oat[0], oat[1], oat[2]};
   }

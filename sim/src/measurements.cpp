@@ -2,14 +2,13 @@
 
 #include <robocal/kinematics/ik.hpp>
 #include <robocal/kinematics/kinematics.hpp>
+#include <robocal/kinematics/units.hpp>
 
 #include <cmath>
-#include <numbers>
 
 namespace robocal {
 namespace {
 
-constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 constexpr double kWristMarginDeg = 5.0;        // stay this far from the wrist singularity (J5 = 0)
 constexpr double kLimitMarginDeg = 5.0;        // and this far inside the joint limits
 constexpr double kBarToolClearanceDeg = 70.0;  // angle kept between the bar and the tool axis

@@ -89,7 +89,7 @@ TEST_CASE("Probe: verdicts in technician words", "[drivers][probe]") {
   }
 }
 
-TEST_CASE("Probe: the robocal probe command", "[drivers][probe]") {
+TEST_CASE("Probe: the robocal probe command", "[drivers][probe][cli]") {
   CellSimProcess sim;
   const auto [ok_code, ok_out] =
       runRobocal("probe --config " ROBOCAL_SOURCE_DIR "/config/drivers.json --val " +
@@ -105,7 +105,8 @@ TEST_CASE("Probe: the robocal probe command", "[drivers][probe]") {
   CHECK_THAT(bad_out, Catch::Contains("garbled"));
 }
 
-TEST_CASE("Probe: the robocal probe command reads robocald's config file", "[drivers][probe]") {
+TEST_CASE("Probe: the robocal probe command reads robocald's config file",
+          "[drivers][probe][cli]") {
   CellSimProcess sim;
   // robocald.json as installed, with its drivers section pointed at the simulator: probe reads
   // that section (the daemon's other keys, unknown to a drivers file, are no error) and probes

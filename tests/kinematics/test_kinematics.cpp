@@ -3,6 +3,7 @@
 #include <robocal/kinematics/ik.hpp>
 #include <robocal/kinematics/kinematics.hpp>
 #include <robocal/kinematics/puma560.hpp>
+#include <robocal/kinematics/units.hpp>
 
 #include <random>
 
@@ -63,9 +64,9 @@ TEST_CASE("a model built from the DH table reproduces the DH product") {
     const JointsDeg q = randomJoints(rng);
     Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
     for (int j = 0; j < kJointCount; ++j)
-      t = t * Eigen::AngleAxisd(q[j] * M_PI / 180, Eigen::Vector3d::UnitZ()) *
+      t = t * Eigen::AngleAxisd(q[j] * kRadPerDeg, Eigen::Vector3d::UnitZ()) *
           Eigen::Translation3d(0, 0, dh[j].d_mm) * Eigen::Translation3d(dh[j].a_mm, 0, 0) *
-          Eigen::AngleAxisd(dh[j].alpha_deg * M_PI / 180, Eigen::Vector3d::UnitX());
+          Eigen::AngleAxisd(dh[j].alpha_deg * kRadPerDeg, Eigen::Vector3d::UnitX());
     CHECK(kin.toolPose(q).matrix().isApprox(t.matrix(), 1e-12));
   }
 }
@@ -146,7 +147,7 @@ TEST_CASE("joint Jacobian matches central differences of the tool pose") {
     plus[j] += h_deg;
     minus[j] -= h_deg;
     const Eigen::Vector3d dp =
-        (kin.toolPose(plus) * point - kin.toolPose(minus) * point) / (2 * h_deg * M_PI / 180);
+        (kin.toolPose(plus) * point - kin.toolPose(minus) * point) / (2 * h_deg * kRadPerDeg);
     CHECK((jac.block<3, 1>(0, j) - dp).norm() < 1e-5 * std::max(1.0, dp.norm()));
   }
 }

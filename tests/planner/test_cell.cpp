@@ -67,7 +67,8 @@ TEST_CASE("bad cell files give an error naming the key") {
   // Found with fuzz_cell: the message dumped a deeply nested value and overflowed the stack.
   const std::string deep = std::string(200000, '[') + std::string(200000, ']');
   CHECK(errorOf(R"({"model_uncertainty": {"models": )" + deep + "}}")
-            .find("model_uncertainty.models: expected an integer, got array") != std::string::npos);
+            .find("model_uncertainty.models: expected a whole number, got array") !=
+        std::string::npos);
   CHECK(errorOf(R"({"model_uncertainty": {"models": 2.5}})").find("got 2.5") != std::string::npos);
   // Found by fuzz_cell: a number too large for a double escaped as json::out_of_range.
   CHECK(errorOf(R"({"bar": {"nominal_length_mm": 1e30830}})").find("not valid JSON") !=

@@ -225,7 +225,7 @@ TEST_CASE("check-plan catches a hand-corrupted plan and names the step") {
   }
 }
 
-TEST_CASE("robocal check-plan prints each violation with its step and exits non-zero") {
+TEST_CASE("robocal check-plan prints each violation with its step and exits non-zero", "[cli]") {
   nlohmann::json j = nlohmann::json::parse(formatPlan(defaultPlan()));
   const std::string good = tempPath("good_plan.json");
   const std::string bad = tempPath("bad_plan.json");
@@ -402,7 +402,7 @@ TEST_CASE("the deflection forecast grows with the model uncertainty") {
   for (const ShellPlan& s : plan.shells) CHECK(s.summary.predicted_deflection_mm > 0);
 }
 
-TEST_CASE("robocal simulate --plan samples at the plan's data points") {
+TEST_CASE("robocal simulate --plan samples at the plan's data points", "[cli]") {
   CellConfig cell = defaultCell();
   cell.connections = {Connection{0, 1}, Connection{2, 0}};
   cell.bar.extension_lengths_mm = {0};

@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 
 #include <robocal/kinematics/puma560.hpp>
+#include <robocal/kinematics/units.hpp>
 #include <robocal/planner/puma_ik.hpp>
 
 #include <cmath>
@@ -17,7 +18,7 @@ JointsDeg deg(double a, double b, double c, double d, double e, double f) {
 }
 
 double angleBetweenDeg(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
-  return std::abs(Eigen::AngleAxisd(a * b.transpose()).angle()) * 180.0 / M_PI;
+  return std::abs(Eigen::AngleAxisd(a * b.transpose()).angle()) * kDegPerRad;
 }
 
 // Random readings inside the limits, away from the three singularities.
@@ -136,7 +137,7 @@ TEST_CASE("IK answers unreachable and singular poses with a status, never NaN") 
     }
   }
   SECTION("elbow singular: arm stretched") {
-    const double straight = -std::atan2(433.07, 20.32) * 180.0 / M_PI;
+    const double straight = -std::atan2(433.07, 20.32) * kDegPerRad;
     const JointsDeg q = deg(0, 40, straight, 0, 30, 0);
     CHECK(ik.singularityMargins(q).elbow_deg < 1e-6);
     const IkSolution s = ik.solve(kin.toolPose(q), ik.configOf(q));

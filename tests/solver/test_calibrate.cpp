@@ -2,11 +2,10 @@
 
 #include <robocal/kinematics/kinematics.hpp>
 #include <robocal/kinematics/puma560.hpp>
+#include <robocal/kinematics/units.hpp>
 #include <robocal/sim/measurements.hpp>
 #include <robocal/solver/assessment.hpp>
 #include <robocal/solver/calibrate.hpp>
-
-#include <numbers>
 
 using namespace robocal;
 
@@ -194,7 +193,7 @@ TEST_CASE("the assessment: the fit's parameters, uncertainties and shells in int
     const bool free = std::count(a.fit.free_params.begin(), a.fit.free_params.end(), i) == 1;
     CHECK(p.estimated == free);
     estimated += p.estimated;
-    const double scale = paramKind(i) == ParamKind::kAngle ? 180.0 / std::numbers::pi : 1.0;
+    const double scale = paramKind(i) == ParamKind::kAngle ? kDegPerRad : 1.0;
     CHECK(p.sigma == Approx(std::sqrt(a.fit.covariance(i, i)) * scale));
     if (!p.estimated) CHECK(p.change() == 0.0);
   }

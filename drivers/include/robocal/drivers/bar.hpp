@@ -74,8 +74,7 @@ class BarReader {
   void onLine(std::function<void(const BarReading&)> callback) { callback_ = std::move(callback); }
 
  private:
-  void arm();
-  void received(const std::string& bytes);
+  void received(std::string_view bytes);
   void handleLine(const std::string& line);
   void drainBacklog();
   void dropPartial();
@@ -84,9 +83,7 @@ class BarReader {
   BarDialect dialect_;
   SerialLink link_;
   LineSplitter splitter_;
-  std::array<char, 1024> buffer_{};
-  std::shared_ptr<int> alive_;  // handlers hold a weak_ptr: they outlive nothing
-  bool reading_ = false, disconnected_ = false;
+  bool disconnected_ = false;
   std::string disconnect_reason_;
   std::optional<BarReading> latest_, latest_valid_;
   std::uint64_t sequence_ = 0;

@@ -17,6 +17,7 @@
 #include <array>
 #include <chrono>
 #include <functional>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -82,6 +83,15 @@ class SerialLink {
   // DisconnectedError that describes it.
   DisconnectedError disconnected(const std::string& why);
 
+  // The receive loop of the drivers, on the io_context. From receive() on, every chunk of bytes
+  // that arrives goes to on_bytes, the next read armed before it is called (so a handler that
+  // throws does not stop the loop); a read error ends the loop and goes to on_error with its
+  // reason. close() ends it too and orphans the pending read: no handler runs after close().
+  void receive(std::function<void(std::string_view)> on_bytes,
+               std::function<void(const std::string&)> on_error);
+  // Restarts the loop when the port is open and no read is pending (a no-op otherwise).
+  void resumeReceiving();
+
  private:
   void openTermios();
   void openLibserialport();
@@ -96,7 +106,21 @@ class SerialLink {
   void* sp_port_ = nullptr;  // struct sp_port*, kept open while libserialport owns the port
   int sp_fd_ = -1;
   std::array<char, 4096> buffer_{};
+  // The receive loop: its handlers, buffer, and the token its pending read holds a weak_ptr of.
+  std::function<void(std::string_view)> on_bytes_;
+  std::function<void(const std::string&)> on_error_;
+  std::array<char, 1024> receive_buffer_{};
+  std::shared_ptr<int> receive_alive_;
+  bool reading_ = false;
 };
+
+// The drivers' reconnect(within_s): calls connect() until it succeeds, retrying every 100 ms
+// for up to within_s when it fails with PortError, DisconnectedError or TimeoutError (after
+// calling after_failure, when given). Then PortError "could not reconnect to <device> within
+// <within_s> s: <the last failure>". Other errors pass through at once.
+void reconnectWithin(double within_s, const std::string& device,
+                     const std::function<void()>& connect,
+                     const std::function<void()>& after_failure = {});
 
 // The termios speed constant for a baud rate, or 0 when termios has none for it.
 speed_t termiosSpeed(int baud);

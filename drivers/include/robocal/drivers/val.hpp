@@ -107,7 +107,6 @@ class ValController {
 
  private:
   struct Exchange;
-  void arm();
   void received(std::string_view bytes);
   void unsolicited(std::string_view bytes);
   void startNext();
@@ -126,9 +125,8 @@ class ValController {
   SerialLink link_;
   boost::asio::steady_timer timer_, poll_timer_;
   ValStats stats_;
-  std::array<char, 1024> buffer_{};
-  std::shared_ptr<int> alive_;  // handlers hold a weak_ptr: they never outlive the controller
-  bool reading_ = false, disconnected_ = false, out_of_sync_ = false;
+  std::shared_ptr<int> alive_;  // timer handlers hold a weak_ptr: they never outlive the controller
+  bool disconnected_ = false, out_of_sync_ = false;
   std::string disconnect_reason_;
   Clock::time_point last_rx_{};
   std::unique_ptr<Exchange> current_;
