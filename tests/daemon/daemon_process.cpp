@@ -6,7 +6,6 @@
 #include <unistd.h>
 #include <chrono>
 #include <csignal>
-#include <cstdlib>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
