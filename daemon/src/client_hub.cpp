@@ -52,7 +52,10 @@ ClientHub::ClientHub(asio::io_context& io, HubLimits limits, LineHandler on_line
 ClientHub::~ClientHub() {
   boost::system::error_code ec;
   acceptor_.close(ec);
-  stall_timer_.cancel();
+  try {
+    stall_timer_.cancel();  // may throw (Boost < 1.77); a destructor must not
+  } catch (const boost::system::system_error&) {
+  }
   for (auto& [id, c] : clients_) c->socket.close(ec);
 }
 

@@ -160,6 +160,12 @@ JointsDeg ShellRunner::connect(const ShellPlan& shell) {
   ctx_.setState(proto::RunState::kMoving,
                 "to shell " + std::to_string(shell.shell) + "'s connect pose");
   JointsDeg q = ctx_.move(shell.connect.joints_deg, false);
+  // From the connect prompt on, the operator may seat the bar at any moment: a stop or a crash
+  // before the confirm (the daemon killed between the seating and the confirm) must still ask to
+  // detach it before anything moves. Recording it only at the confirm let a resume move the robot
+  // back from a nudged pose with the bar seated (found by the kill -9 test: the bar went over
+  // range).
+  ctx_.setAttachment({true, c.ball_index + 1, c.chuck_index + 1, shell.extension_mm, dir_.id()});
   ctx_.waitConfirm(dir_,
                    proto::Prompt{proto::PromptAction::kConnect, shell.shell, c.ball_index + 1,
                                  c.chuck_index + 1, shell.extension_mm, connectMessage(shell)},
@@ -167,7 +173,6 @@ JointsDeg ShellRunner::connect(const ShellPlan& shell) {
                      // The bar is not attached yet: the ball moves along the line to the chuck.
                      q = ctx_.move(corrected(shell, q, -mm), false);
                    });
-  ctx_.setAttachment({true, c.ball_index + 1, c.chuck_index + 1, shell.extension_mm, dir_.id()});
   ctx_.setBarOffset(cell_.bar.nominal_length_mm + shell.extension_mm);
   // The bar must read, and read near zero, before anything moves with it attached.
   ctx_.forgetReading();

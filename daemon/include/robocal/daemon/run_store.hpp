@@ -36,9 +36,10 @@ class RunDir {
 };
 
 // Whether the ball-bar may be attached to the robot, kept across runs and restarts in
-// <data_dir>/bar.json: set when the operator confirms a connection, cleared only when the operator
-// confirms a detach. A missing file means never attached; a damaged one counts as attached (doubt
-// keeps the robot still until the operator confirms).
+// <data_dir>/bar.json: set when the daemon asks for a connection (the operator may seat the bar
+// from then on), cleared only when the operator confirms a detach. A missing file means never
+// attached; a damaged one counts as attached (doubt keeps the robot still until the operator
+// confirms).
 struct BarAttachment {
   bool maybe_attached = false;
   int ball = 0, chuck = 0;  // 1-based, 0 when not known
