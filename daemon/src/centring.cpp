@@ -19,21 +19,8 @@ Centring::Centring(const Model& nominal, const CellConfig& cell, bool enabled,
 
 void Centring::refit() {
   const ModelUncertainty& u = cell_.uncertainty;
-  ParamVector sigma;
-  for (int i = 0; i < kParamCount; ++i) {
-    const bool joint = (i % (kLinkParamCount + kJointParamCount)) >= kLinkParamCount;
-    switch (paramKind(i)) {
-      case ParamKind::kTranslation:
-        sigma[i] = u.translation_sigma_mm;
-        break;
-      case ParamKind::kAngle:
-        sigma[i] = (joint ? u.joint_offset_sigma_deg : u.link_angle_sigma_deg) * kRadPerDeg;
-        break;
-      case ParamKind::kGain:
-        sigma[i] = u.gain_sigma;
-        break;
-    }
-  }
+  const ParamVector sigma = paramSigmas(u.translation_sigma_mm, u.link_angle_sigma_deg,
+                                        u.joint_offset_sigma_deg, u.gain_sigma);
   SolveOptions opt;
   opt.prior_sigma = 3.0 * sigma;  // generous: the prior only steadies what data cannot see
   opt.max_iterations = 20;

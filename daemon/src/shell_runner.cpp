@@ -105,14 +105,9 @@ void ShellRunner::progress() {
 }
 
 Sample ShellRunner::shellSample(const ShellPlan& shell, const RunContext::Measurement& m) const {
-  Sample s;
-  s.shell = shell.shell;
-  s.ball_index = shell.connection.ball_index;
-  s.chuck_index = shell.connection.chuck_index;
-  s.extension_mm = shell.extension_mm;
-  s.joints_deg = m.joints_deg;
-  s.length_mm = ctx_.barOffset() + m.deflection_mm;
-  return s;
+  // Not a data point (lat/lon 0) unless the caller sets them.
+  return makeSample(shell.shell, shell.connection, shell.extension_mm, 0, 0, m.joints_deg,
+                    ctx_.barOffset() + m.deflection_mm);
 }
 
 // ------------------------------------------------------------------------ the run

@@ -20,6 +20,26 @@ ParamKind paramKind(int index) {
   return within == kLinkParamCount ? ParamKind::kAngle : ParamKind::kGain;
 }
 
+ParamVector paramSigmas(double translation_mm, double link_angle_deg, double joint_offset_deg,
+                        double gain) {
+  ParamVector sigma;
+  for (int i = 0; i < kParamCount; ++i) {
+    const bool joint = (i % kBlock) >= kLinkParamCount;
+    switch (paramKind(i)) {
+      case ParamKind::kTranslation:
+        sigma[i] = translation_mm;
+        break;
+      case ParamKind::kAngle:
+        sigma[i] = (joint ? joint_offset_deg : link_angle_deg) * kRadPerDeg;
+        break;
+      case ParamKind::kGain:
+        sigma[i] = gain;
+        break;
+    }
+  }
+  return sigma;
+}
+
 std::string paramName(int index) {
   const int block = index / kBlock;
   const int within = index % kBlock;

@@ -818,17 +818,11 @@ std::vector<Sample> planSamples(const Model& model, const Plan& plan) {
   for (const ShellPlan& shell : plan.shells)
     for (const PlanStep& step : shell.steps) {
       if (step.kind != StepKind::kPoint) continue;
-      Sample s;
-      s.shell = shell.shell;
-      s.ball_index = shell.connection.ball_index;
-      s.chuck_index = shell.connection.chuck_index;
-      s.extension_mm = shell.extension_mm;
-      s.lat_deg = step.lat_deg;
-      s.lon_deg = step.lon_deg;
-      s.joints_deg = step.joints_deg;
-      s.length_mm = kin.barLength(step.joints_deg, model.balls_mm[s.ball_index],
-                                  model.chucks_mm[s.chuck_index]);
-      out.push_back(s);
+      const Connection& c = shell.connection;
+      out.push_back(makeSample(shell.shell, c, shell.extension_mm, step.lat_deg, step.lon_deg,
+                               step.joints_deg,
+                               kin.barLength(step.joints_deg, model.balls_mm[c.ball_index],
+                                             model.chucks_mm[c.chuck_index])));
     }
   return out;
 }

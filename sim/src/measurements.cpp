@@ -37,22 +37,9 @@ Eigen::Matrix3d toolOrientation(const Eigen::Vector3d& approach, double roll_rad
 Model perturbModel(const Model& nominal, const PerturbationSigmas& s, std::mt19937_64& rng) {
   std::normal_distribution<double> unit(0.0, 1.0);
   ParamVector p = toParams(nominal);
-  for (int i = 0; i < kParamCount; ++i) {
-    const bool joint = (i % 8) >= kLinkParamCount;
-    double sigma = 0;
-    switch (paramKind(i)) {
-      case ParamKind::kTranslation:
-        sigma = s.translation_mm;
-        break;
-      case ParamKind::kAngle:
-        sigma = (joint ? s.joint_offset_deg : s.link_angle_deg) * kRadPerDeg;
-        break;
-      case ParamKind::kGain:
-        sigma = s.gain;
-        break;
-    }
-    p[i] += sigma * unit(rng);
-  }
+  const ParamVector sigma =
+      paramSigmas(s.translation_mm, s.link_angle_deg, s.joint_offset_deg, s.gain);
+  for (int i = 0; i < kParamCount; ++i) p[i] += sigma[i] * unit(rng);
   Model truth = withParams(nominal, p);
   truth.name = nominal.name + " (simulated truth)";
   return truth;
@@ -135,17 +122,12 @@ std::vector<Sample> measureShell(const Model& truth, const ShellRequest& req,
   std::vector<Sample> samples;
   samples.reserve(poses.size());
   for (const ShellPose& pose : poses) {
-    Sample s;
-    s.shell = req.shell;
-    s.ball_index = req.connection.ball_index;
-    s.chuck_index = req.connection.chuck_index;
-    s.extension_mm = req.extension_mm;
-    s.lat_deg = pose.lat_deg;
-    s.lon_deg = pose.lon_deg;
-    s.length_mm = kin.barLength(pose.joints_deg, truth.balls_mm[s.ball_index],
-                                truth.chucks_mm[s.chuck_index]);
+    const Connection& c = req.connection;
+    Sample s =
+        makeSample(req.shell, c, req.extension_mm, pose.lat_deg, pose.lon_deg, pose.joints_deg,
+                   kin.barLength(pose.joints_deg, truth.balls_mm[c.ball_index],
+                                 truth.chucks_mm[c.chuck_index]));
     if (noise.length_sigma_mm > 0) s.length_mm += length_noise(rng);
-    s.joints_deg = pose.joints_deg;
     if (noise.joint_quantum_deg > 0)
       for (int j = 0; j < kJointCount; ++j)
         s.joints_deg[j] =

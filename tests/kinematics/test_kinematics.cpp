@@ -188,3 +188,12 @@ TEST_CASE("joint limits with margin") {
   CHECK_FALSE(withinLimits(m, deg(0, 0, 0, 0, 96, 0), 5.0));
   CHECK(withinLimits(m, deg(0, 0, 0, 0, 94, 0), 5.0));
 }
+
+TEST_CASE("paramSigmas: one sigma per kind, angles in radians", "[kinematics]") {
+  const robocal::ParamVector s = robocal::paramSigmas(0.2, 0.02, 0.05, 0.0005);
+  CHECK(s[robocal::paramIndexByName("L0.x")] == 0.2);
+  CHECK(s[robocal::paramIndexByName("L3.rz")] == Approx(0.02 * robocal::kRadPerDeg));
+  CHECK(s[robocal::paramIndexByName("J2.offset")] == Approx(0.05 * robocal::kRadPerDeg));
+  CHECK(s[robocal::paramIndexByName("J6.gain")] == 0.0005);
+  CHECK(s[robocal::paramIndexByName("L6.z")] == 0.2);
+}

@@ -80,6 +80,11 @@ constexpr int jointParamIndex(int joint /*0-based*/) {
   return linkParamIndex(joint) + kLinkParamCount;
 }
 ParamKind paramKind(int index);
+// One sigma per parameter (internal units) from a sigma per kind in interface units: link
+// translations (mm), link angles (deg), joint offsets (deg), joint gains (unitless). The
+// simulator's perturbation and the daemon's centring prior share it.
+ParamVector paramSigmas(double translation_mm, double link_angle_deg, double joint_offset_deg,
+                        double gain);
 // "L0.x", "L3.ry", "J1.offset", "J6.gain".
 std::string paramName(int index);
 // Unit of the parameter at the interfaces: "mm", "deg" or "" (gain).

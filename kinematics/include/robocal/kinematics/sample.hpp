@@ -36,4 +36,22 @@ std::string connectionList(const std::vector<Connection>& connections);
 std::vector<Connection> parseConnections(const std::string& text);
 std::vector<Connection> allConnections();
 
+// A sample of shell `shell`: the bar of extension `extension_mm` between `connection`'s ball and
+// chuck, the robot at `joints_deg`, the bar `length_mm` long, at the point (lat_deg, lon_deg) of
+// the shell. The planner (predicted samples), the simulator and the daemon make them alike.
+inline Sample makeSample(int shell, const Connection& connection, double extension_mm,
+                         double lat_deg, double lon_deg, const JointsDeg& joints_deg,
+                         double length_mm) {
+  Sample s;
+  s.shell = shell;
+  s.ball_index = connection.ball_index;
+  s.chuck_index = connection.chuck_index;
+  s.extension_mm = extension_mm;
+  s.lat_deg = lat_deg;
+  s.lon_deg = lon_deg;
+  s.joints_deg = joints_deg;
+  s.length_mm = length_mm;
+  return s;
+}
+
 }  // namespace robocal
