@@ -80,6 +80,18 @@ class Harness {
       if (o.value("class", "") == cls) out.push_back(o);
     return out;
   }
+  // Checks made on the run thread (in at_prompt or a publish): Catch2's assertions are for the
+  // test's own thread only, so they are collected here and checked by the test with problems().
+  void expect(bool ok, const std::string& what) {
+    if (ok) return;
+    std::lock_guard lock(mutex_);
+    problems_.push_back(what);
+  }
+  std::vector<std::string> problems() const {
+    std::lock_guard lock(mutex_);
+    return problems_;
+  }
+
   std::vector<json> events(const std::string& name) const {
     std::vector<json> out;
     for (const json& e : seen("EVENT"))
@@ -107,7 +119,8 @@ class Harness {
         cell_io_->attach(o["ball"], o["chuck"], o["extension_mm"]);
       else
         cell_io_->detach();
-      REQUIRE(run_->confirm(o["shell"].get<int>()).empty());
+      const std::string refused = run_->confirm(o["shell"].get<int>());
+      expect(refused.empty(), "confirm refused: " + refused);
     }
     std::lock_guard lock(mutex_);
     seen_.push_back(o);
@@ -123,6 +136,7 @@ class Harness {
   mutable std::mutex mutex_;
   std::condition_variable changed_;
   std::vector<json> seen_;
+  std::vector<std::string> problems_;
   std::size_t state_seen_ = 0;
 };
 
@@ -164,6 +178,7 @@ TEST_CASE("run states: a whole run, the bar detached at the end, then a second r
   REQUIRE(again.size() == 8);
   CHECK(again[4]["action"] == "connect");
   CHECK(h.run().runs()["runs"].size() == 2);
+  CHECK(h.problems().empty());
 }
 
 TEST_CASE("run states: a pause at a prompt, a resume, a pause again and a second resume",
@@ -172,7 +187,7 @@ TEST_CASE("run states: a pause at a prompt, a resume, a pause again and a second
   int connects = 0;
   h.at_prompt = [&](const json& p) {
     if (p["action"] == "connect" && ++connects <= 2) {
-      CHECK(h.run().pause("coffee").empty());
+      h.expect(h.run().pause("coffee").empty(), "pause at the prompt refused");
       return false;
     }
     return true;
@@ -188,13 +203,14 @@ TEST_CASE("run states: a pause at a prompt, a resume, a pause again and a second
   REQUIRE(h.waitState({"paused", "done", "error"}) == "done");
   CHECK(h.seen("SAMPLE").size() == static_cast<std::size_t>(h.points()));
   CHECK(h.run().runs()["runs"][0]["status"] == "done");
+  CHECK(h.problems().empty());
 }
 
 TEST_CASE("run states: aborting a paused run tells the watchers, and it cannot be resumed",
           "[daemon][states]") {
   Harness h({"B1C1"}, {0});
   h.at_prompt = [&](const json&) {
-    CHECK(h.run().pause({}).empty());
+    h.expect(h.run().pause({}).empty(), "pause at the prompt refused");
     return false;
   };
   REQUIRE(h.run().start(h.plan()).empty());
@@ -211,6 +227,7 @@ TEST_CASE("run states: aborting a paused run tells the watchers, and it cannot b
   h.restart();                                   // and so it stays after a restart
   CHECK(h.run().runs()["runs"][0]["status"] == "aborted");
   CHECK(h.run().status().state == proto::RunState::kIdle);
+  CHECK(h.problems().empty());
 }
 
 TEST_CASE("run states: nudges at a connect prompt move the ball, within their limits",
@@ -221,9 +238,9 @@ TEST_CASE("run states: nudges at a connect prompt move the ball, within their li
   h.at_prompt = [&](const json& p) {
     if (p["action"] != "connect" || nudged) return true;
     nudged = true;
-    CHECK_FALSE(h.run().nudge(1, 6).empty());  // at most 5 mm a time
-    CHECK_FALSE(h.run().nudge(2, 1).empty());  // not this prompt's shell
-    CHECK(h.run().nudge(1, 2).empty());
+    h.expect(!h.run().nudge(1, 6).empty(), "a 6 mm nudge accepted (at most 5 mm a time)");
+    h.expect(!h.run().nudge(2, 1).empty(), "a nudge for another shell's prompt accepted");
+    h.expect(h.run().nudge(1, 2).empty(), "a 2 mm nudge refused");
     return false;  // confirmed below, once the nudge has moved
   };
   REQUIRE(h.run().start(h.plan()).empty());
@@ -248,6 +265,7 @@ TEST_CASE("run states: nudges at a connect prompt move the ball, within their li
   REQUIRE(h.run().confirm(1).empty());
   REQUIRE(h.waitState({"done", "paused", "error"}) == "done");
   CHECK_FALSE(h.run().nudge(1, 1).empty());  // no prompt pending
+  CHECK(h.problems().empty());
 }
 
 TEST_CASE("run states: two bar extensions make sets 1 and 2, the second predicted by the first",
@@ -263,6 +281,7 @@ TEST_CASE("run states: two bar extensions make sets 1 and 2, the second predicte
   CHECK(results[1]["extension_mm"] == 100.0);
   CHECK(results[1].contains("prediction"));
   CHECK(h.events("set_complete").size() == 2);
+  CHECK(h.problems().empty());
 }
 
 TEST_CASE("run states: a model error keeps the bar centred by corrective moves and refits",
@@ -273,6 +292,7 @@ TEST_CASE("run states: a model error keeps the bar centred by corrective moves a
   CHECK_FALSE(h.events("recentre").empty());
   CHECK(h.cell().worstDeflection() < 1.8);  // never past the hard limit
   CHECK(h.seen("SAMPLE").size() == static_cast<std::size_t>(h.points()));
+  CHECK(h.problems().empty());
 }
 
 TEST_CASE("run states: a controller fault pauses the run wherever it comes; resume finishes it",
@@ -293,6 +313,7 @@ TEST_CASE("run states: a controller fault pauses the run wherever it comes; resu
       CHECK(samples.size() == static_cast<std::size_t>(h.points()));
       CHECK(pointsOf(samples).size() == samples.size());  // nothing measured twice
       CHECK_FALSE(h.cell().attached());
+      CHECK(h.problems().empty());
     }
   }
 }
