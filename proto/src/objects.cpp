@@ -1,5 +1,7 @@
 #include <robocal/proto/objects.hpp>
 
+#include "wire_names.hpp"
+
 #include <array>
 #include <limits>
 #include <utility>
@@ -14,10 +16,6 @@ constexpr std::array<std::pair<PromptAction, const char*>, 2> kPromptActions = {
 
 constexpr std::array<BarKind, 4> kBarKinds = {BarKind::kReading, BarKind::kOverRange,
                                               BarKind::kNoProbe, BarKind::kDeviceError};
-
-constexpr std::array<Cmd, 11> kAllCmds = {Cmd::kStatus,  Cmd::kWatch,  Cmd::kPlan,  Cmd::kStart,
-                                          Cmd::kConfirm, Cmd::kNudge,  Cmd::kPause, Cmd::kResume,
-                                          Cmd::kAbort,   Cmd::kResult, Cmd::kRuns};
 
 // Reads the fields of one object (or of a nested part of it: `path` is "devices." for STATUS's
 // devices) and says, on any problem, which class and which field.
@@ -146,26 +144,16 @@ json nullOr(const auto& optional) {
 }  // namespace
 
 const char* promptActionName(PromptAction action) {
-  for (const auto& [a, name] : kPromptActions)
-    if (a == action) return name;
-  return "?";
+  return wireName(kPromptActions, action, "?");
 }
 
 std::optional<PromptAction> parsePromptAction(std::string_view name) {
-  for (const auto& [a, n] : kPromptActions)
-    if (name == n) return a;
-  return std::nullopt;
+  return wireValue(kPromptActions, name);
 }
 
 std::optional<BarKind> parseBarKind(std::string_view name) {
   for (const BarKind k : kBarKinds)
     if (name == barKindName(k)) return k;
-  return std::nullopt;
-}
-
-std::optional<Cmd> parseCmd(std::string_view name) {
-  for (const Cmd c : kAllCmds)
-    if (name == cmdName(c)) return c;
   return std::nullopt;
 }
 

@@ -1,4 +1,7 @@
+#include <robocal/proto/objects.hpp>
 #include <robocal/proto/protocol.hpp>
+
+#include "wire_names.hpp"
 
 #include <robocal/proto/objects.hpp>
 
@@ -45,9 +48,7 @@ std::string stringField(const json& obj, const char* key, const std::string& cmd
 }  // namespace
 
 const char* cmdName(Cmd cmd) {
-  for (const auto& [c, name] : kCmds)
-    if (c == cmd) return name;
-  return "?";
+  return wireName(kCmds, cmd, "?");
 }
 
 bool needsToken(Cmd cmd) {
@@ -76,13 +77,9 @@ Request parseRequest(std::string_view line) {
   if (!cmd_it->is_string()) throw RequestError("\"cmd\" must be a string");
   const std::string name = cmd_it->get<std::string>();
   Request req;
-  bool known = false;
-  for (const auto& [c, n] : kCmds)
-    if (name == n) {
-      req.cmd = c;
-      known = true;
-    }
-  if (!known)
+  const std::optional<Cmd> cmd = parseCmd(name);
+  if (cmd) req.cmd = *cmd;
+  if (!cmd)
     throw RequestError("unknown cmd \"" + name +
                            "\" (status, watch, plan, start, confirm, nudge, pause, resume, abort, "
                            "result, runs)",
@@ -176,15 +173,15 @@ constexpr std::array<std::pair<RunState, const char*>, 11> kRunStates = {
 }  // namespace
 
 const char* runStateName(RunState state) {
-  for (const auto& [s, name] : kRunStates)
-    if (s == state) return name;
-  return "error";
+  return wireName(kRunStates, state, "error");
 }
 
 std::optional<RunState> parseRunState(std::string_view name) {
-  for (const auto& [s, n] : kRunStates)
-    if (name == n) return s;
-  return std::nullopt;
+  return wireValue(kRunStates, name);
+}
+
+std::optional<Cmd> parseCmd(std::string_view name) {
+  return wireValue(kCmds, name);
 }
 
 bool isBusy(RunState state) {
