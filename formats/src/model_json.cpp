@@ -1,7 +1,9 @@
 #include <robocal/formats/model_json.hpp>
 
 #include <robocal/jsonread/strict_json.hpp>
+#include <robocal/kinematics/units.hpp>
 
+#include <cctype>
 #include <cmath>
 #include <nlohmann/json.hpp>
 
@@ -115,6 +117,121 @@ nlohmann::ordered_json provenanceToJson(const ModelProvenance& p) {
   return out;
 }
 
+// The covariance block: the estimated parameters by name and their covariance in interface units
+// (mm, deg, gain); ParamVector units inside.
+double interfaceScale(int index) {
+  return paramKind(index) == ParamKind::kAngle ? kDegPerRad : 1.0;
+}
+
+Eigen::MatrixXd covarianceFromJson(const Reader& r, const json& value) {
+  const std::string where = "covariance";
+  r.object(value, where);
+  const auto names_it = value.find("parameters");
+  const auto matrix_it = value.find("matrix");
+  if (names_it == value.end()) r.fail(where, "missing \"parameters\"");
+  if (matrix_it == value.end()) r.fail(where, "missing \"matrix\"");
+  if (!names_it->is_array()) r.fail(where + ".parameters", "expected an array of parameter names");
+  std::vector<int> index;
+  for (size_t k = 0; k < names_it->size(); ++k) {
+    const std::string path = where + ".parameters[" + std::to_string(k) + "]";
+    const json& name = (*names_it)[k];
+    if (!name.is_string()) r.fail(path, "expected a parameter name such as \"J2.offset\"");
+    const int i = paramIndexByName(name.get<std::string>());
+    if (i < 0) r.fail(path, "unknown parameter \"" + name.get<std::string>() + "\"");
+    for (int seen : index)
+      if (seen == i) r.fail(path, "\"" + name.get<std::string>() + "\" is listed twice");
+    index.push_back(i);
+  }
+  const size_t n = index.size();
+  if (!matrix_it->is_array() || matrix_it->size() != n)
+    r.fail(where + ".matrix", "expected " + std::to_string(n) + " rows, one per parameter");
+  Eigen::MatrixXd cov = Eigen::MatrixXd::Zero(kParamCount, kParamCount);
+  for (size_t a = 0; a < n; ++a) {
+    const std::string row_path = where + ".matrix[" + std::to_string(a) + "]";
+    const json& row = (*matrix_it)[a];
+    if (!row.is_array() || row.size() != n)
+      r.fail(row_path, "expected " + std::to_string(n) + " numbers");
+    for (size_t b = 0; b < n; ++b) {
+      const std::string path = row_path + "[" + std::to_string(b) + "]";
+      if (!row[b].is_number()) r.fail(path, "expected a number, got " + describe(row[b]));
+      cov(index[a], index[b]) =
+          row[b].get<double>() / (interfaceScale(index[a]) * interfaceScale(index[b]));
+    }
+    if (!(cov(index[a], index[a]) >= 0)) r.fail(row_path, "a negative variance on the diagonal");
+  }
+  const double largest = cov.cwiseAbs().maxCoeff();
+  if ((cov - cov.transpose()).cwiseAbs().maxCoeff() > 1e-9 * largest)
+    r.fail(where + ".matrix", "not symmetric");
+  return cov;
+}
+
+nlohmann::ordered_json covarianceToJson(const Eigen::MatrixXd& cov) {
+  using ojson = nlohmann::ordered_json;
+  std::vector<int> index;
+  for (int i = 0; i < kParamCount; ++i)
+    if (cov(i, i) > 0) index.push_back(i);
+  ojson names = ojson::array(), matrix = ojson::array();
+  for (int a : index) {
+    names.push_back(paramName(a));
+    ojson row = ojson::array();
+    for (int b : index) row.push_back(cov(a, b) * interfaceScale(a) * interfaceScale(b));
+    matrix.push_back(row);
+  }
+  return ojson{{"units", "products of the parameters' units: mm, deg, gain"},
+               {"parameters", names},
+               {"matrix", matrix}};
+}
+
+// dump(2) puts every number on a line of its own; arrays of numbers go on one line instead, so
+// that points and the covariance's rows read as rows.
+std::string compactNumberArrays(const std::string& text) {
+  std::string out;
+  out.reserve(text.size());
+  size_t i = 0;
+  bool in_string = false;
+  while (i < text.size()) {
+    const char at = text[i];
+    if (in_string) {  // strings are copied as they are, escapes included
+      out += at;
+      if (at == '\\' && i + 1 < text.size()) out += text[++i];
+      else if (at == '"') in_string = false;
+      ++i;
+      continue;
+    }
+    if (at == '"') in_string = true;
+    if (at == '[') {
+      size_t j = i + 1;
+      bool numbers_only = true;
+      while (j < text.size() && text[j] != ']') {
+        const char c = text[j];
+        if (!(std::isdigit(static_cast<unsigned char>(c)) || c == '-' || c == '+' || c == '.' ||
+              c == 'e' || c == 'E' || c == ',' || std::isspace(static_cast<unsigned char>(c)))) {
+          numbers_only = false;
+          break;
+        }
+        ++j;
+      }
+      if (numbers_only && j < text.size() && j > i + 1) {
+        out += '[';
+        bool pending_space = false;
+        for (size_t k = i + 1; k < j; ++k) {
+          const char c = text[k];
+          if (std::isspace(static_cast<unsigned char>(c))) continue;
+          if (pending_space) out += ' ';
+          pending_space = false;
+          out += c;
+          if (c == ',') pending_space = true;
+        }
+        out += ']';
+        i = j + 1;
+        continue;
+      }
+    }
+    out += text[i++];
+  }
+  return out;
+}
+
 }  // namespace
 
 Model modelFromJson(const json& root, const std::string& source) {
@@ -159,6 +276,8 @@ Model modelFromJson(const json& root, const std::string& source) {
   const json& chucks = r.array(root, "chucks", kChuckCount);
   for (int c = 0; c < kChuckCount; ++c)
     m.chucks_mm[c] = r.point(chucks[c], "chucks[" + std::to_string(c) + "]");
+  if (const auto it = root.find("covariance"); it != root.end())
+    m.covariance = covarianceFromJson(r, *it);
   return m;
 }
 
@@ -200,11 +319,12 @@ nlohmann::ordered_json modelToJson(const Model& m) {
   for (const auto& c : m.chucks_mm) chucks.push_back(ojson::array({c.x(), c.y(), c.z()}));
   out["balls"] = balls;
   out["chucks"] = chucks;
+  if (m.covariance) out["covariance"] = covarianceToJson(*m.covariance);
   return out;
 }
 
 std::string formatModel(const Model& model) {
-  return modelToJson(model).dump(2) + "\n";
+  return compactNumberArrays(modelToJson(model).dump(2)) + "\n";
 }
 
 Model loadModelFile(const std::string& path) {

@@ -348,6 +348,7 @@ Model calibratedModel(const FitAssessment& fit, const FitOrigin& origin,
   p.robocal_version = robocalVersion();
   p.warnings = fit.problems;
   m.provenance = std::move(p);
+  m.covariance = fit.fit.covariance;  // what compensate's predicted errors come from
   return m;
 }
 

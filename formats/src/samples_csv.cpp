@@ -1,5 +1,7 @@
 #include <robocal/formats/samples_csv.hpp>
 
+#include <robocal/formats/csv.hpp>
+
 #include <array>
 #include <charconv>
 #include <cmath>
@@ -13,25 +15,6 @@ constexpr std::array<const char*, 13> kColumns = {
     "shell", "ball", "chuck", "extension_mm", "lat_deg", "lon_deg",  "j1",
     "j2",    "j3",   "j4",    "j5",           "j6",      "length_mm"};
 
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r'))
-    s.remove_suffix(1);
-  return s;
-}
-
-std::vector<std::string_view> splitFields(std::string_view line) {
-  std::vector<std::string_view> fields;
-  size_t start = 0;
-  while (true) {
-    const size_t comma = line.find(',', start);
-    fields.push_back(trim(line.substr(start, comma - start)));
-    if (comma == std::string_view::npos) break;
-    start = comma + 1;
-  }
-  return fields;
-}
-
 }  // namespace
 
 const char* const kSamplesHeader =
@@ -42,16 +25,8 @@ std::vector<Sample> parseSamples(const std::string& text, const std::string& sou
   std::array<int, kColumns.size()> column_of{};
   size_t header_fields = 0;
   bool have_header = false;
-  int line_no = 0;
-  size_t pos = 0;
-  while (pos < text.size()) {
-    size_t end = text.find('\n', pos);
-    if (end == std::string::npos) end = text.size();
-    const std::string_view line = trim(std::string_view(text).substr(pos, end - pos));
-    pos = end + 1;
-    ++line_no;
-    if (line.empty() || line.front() == '#') continue;
-    const auto fields = splitFields(line);
+  csv::forEachLine(text, [&](int line_no, std::string_view line) {
+    const auto fields = csv::splitFields(line);
     const std::string where = source + ":" + std::to_string(line_no) + ": ";
 
     if (!have_header) {
@@ -65,7 +40,7 @@ std::vector<Sample> parseSamples(const std::string& text, const std::string& sou
       }
       header_fields = fields.size();
       have_header = true;
-      continue;
+      return;
     }
 
     if (fields.size() != header_fields)
@@ -74,15 +49,11 @@ std::vector<Sample> parseSamples(const std::string& text, const std::string& sou
     std::array<double, kColumns.size()> v{};
     for (size_t c = 0; c < kColumns.size(); ++c) {
       const std::string_view field = fields[column_of[c]];
-      const char* first = field.data();
-      const char* last = field.data() + field.size();
-      if (!field.empty() && *first == '+') ++first;
-      const auto [ptr, ec] = std::from_chars(first, last, v[c]);
-      if (field.empty() || ec != std::errc() || ptr != last)
-        throw FormatError(where + "column '" + kColumns[c] + "': not a number: '" +
+      const std::optional<double> value = csv::number(field);
+      if (!value)
+        throw FormatError(where + "column '" + kColumns[c] + "': not a finite number: '" +
                           std::string(field) + "'");
-      if (!std::isfinite(v[c]))
-        throw FormatError(where + "column '" + kColumns[c] + "': not a finite number");
+      v[c] = *value;
     }
     auto whole = [&](size_t c, int lo, int hi) {
       if (v[c] != std::floor(v[c]) || v[c] < lo || v[c] > hi)
@@ -104,7 +75,7 @@ std::vector<Sample> parseSamples(const std::string& text, const std::string& sou
     s.source = source;
     s.source_line = line_no;
     samples.push_back(std::move(s));
-  }
+  });
   if (!have_header)
     throw FormatError(source + ": empty: no header row (expected " + std::string(kSamplesHeader) +
                       ")");

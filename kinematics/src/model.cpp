@@ -87,6 +87,7 @@ ParamVector toParams(const Model& model) {
 
 Model withParams(const Model& base, const ParamVector& p) {
   Model m = base;
+  m.covariance.reset();
   for (int k = 0; k < kLinkCount; ++k) {
     LinkParams& l = m.links[k];
     const int i = linkParamIndex(k);

@@ -115,6 +115,21 @@ void validateCell(const CellConfig& c) {
   nonNegative("model_uncertainty.joint_offset_sigma_deg", c.uncertainty.joint_offset_sigma_deg);
   nonNegative("model_uncertainty.gain_sigma", c.uncertainty.gain_sigma);
   inRange("model_uncertainty.models", c.uncertainty.models, 0, 10000);
+  const WorkVolume& w = c.work_volume;
+  for (int a = 0; a < 3; ++a)
+    if (!(w.box_min_mm[a] < w.box_max_mm[a]))
+      bad("work_volume.box_max_mm[" + std::to_string(a) + "]",
+          "must be above work_volume.box_min_mm[" + std::to_string(a) + "]");
+  const std::pair<const char*, std::array<double, 2>> ranges[] = {
+      {"work_volume.rz_range_deg", w.rz_range_deg},
+      {"work_volume.ry_range_deg", w.ry_range_deg},
+      {"work_volume.rx_range_deg", w.rx_range_deg}};
+  for (const auto& [key, range] : ranges) {
+    inRange(std::string(key) + "[0]", range[0], -360, 360);
+    inRange(std::string(key) + "[1]", range[1], -360, 360);
+    if (range[1] < range[0]) bad(key, "[min, max] with min above max");
+  }
+  inRange("work_volume.poses", w.poses, 1, 100000);
 }
 
 }  // namespace robocal

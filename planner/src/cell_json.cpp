@@ -108,6 +108,26 @@ CellConfig cellFromJson(const json& root, const std::string& source) {
     o.get("models", c.uncertainty.models, -kLimit, kLimit);
     o.get("seed", c.uncertainty.seed, -kLimit, kLimit);
   });
+  section(top, "work_volume", [&](Object& o) {
+    WorkVolume& w = c.work_volume;
+    auto numbers = [&](const char* key, auto& out) {
+      const json* a = o.find(key);
+      if (!a) return;
+      const std::string path = o.path(key);
+      if (!a->is_array() || a->size() != out.size())
+        r.fail(path, "expected " + std::to_string(out.size()) + " numbers");
+      for (size_t i = 0; i < out.size(); ++i)
+        out[i] = r.number((*a)[i], jsonread::indexPath(path, i));
+    };
+    numbers("box_min_mm", w.box_min_mm);
+    numbers("box_max_mm", w.box_max_mm);
+    numbers("rz_range_deg", w.rz_range_deg);
+    numbers("ry_range_deg", w.ry_range_deg);
+    numbers("rx_range_deg", w.rx_range_deg);
+    constexpr long long kLimit = 1000000000;
+    o.get("poses", w.poses, -kLimit, kLimit);
+    o.get("seed", w.seed, -kLimit, kLimit);
+  });
   top.finish(kUnknownKey);
   try {
     validateCell(c);
@@ -167,6 +187,11 @@ nlohmann::ordered_json cellToJson(const CellConfig& c) {
                             {"gain_sigma", c.uncertainty.gain_sigma},
                             {"models", c.uncertainty.models},
                             {"seed", c.uncertainty.seed}};
+  const WorkVolume& w = c.work_volume;
+  j["work_volume"] = {{"box_min_mm", w.box_min_mm},     {"box_max_mm", w.box_max_mm},
+                      {"rz_range_deg", w.rz_range_deg}, {"ry_range_deg", w.ry_range_deg},
+                      {"rx_range_deg", w.rx_range_deg}, {"poses", w.poses},
+                      {"seed", w.seed}};
   return j;
 }
 

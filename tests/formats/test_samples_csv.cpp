@@ -56,7 +56,7 @@ TEST_CASE("malformed sample rows are reported with their line number") {
   CHECK_THROWS_WITH(parseSamples(header + good + "1,1,1,0,10,0,1,2,3\n", "s.csv"),
                     Contains("s.csv:3: expected 13 fields, got 9"));
   CHECK_THROWS_WITH(parseSamples(header + "1,1,1,0,10,0,1,2,x3,4,5,6,100\n", "s.csv"),
-                    Contains("s.csv:2: column 'j3': not a number: 'x3'"));
+                    Contains("s.csv:2: column 'j3': not a finite number: 'x3'"));
   CHECK_THROWS_WITH(parseSamples(header + "1,4,1,0,10,0,1,2,3,4,5,6,100\n", "s.csv"),
                     Contains("s.csv:2: column 'ball': expected a whole number from 1 to 3"));
   CHECK_THROWS_WITH(parseSamples(header + "1,1,1,0,10,0,1,2,3,4,5,6,inf\n", "s.csv"),

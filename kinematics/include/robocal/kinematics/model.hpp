@@ -61,6 +61,10 @@ struct ModelProvenance {
 struct Model {
   std::string name;
   std::optional<ModelProvenance> provenance;
+  // The calibration's parameter covariance (54 x 54, ParamVector units: mm, rad, gain), zero rows
+  // and columns for parameters that were not estimated; files hold it in mm and deg
+  // (docs/model-format.md, "covariance"). Absent from nominal models; withParams drops it.
+  std::optional<Eigen::MatrixXd> covariance;
   std::array<LinkParams, kLinkCount> links;
   std::array<JointParams, kJointCount> joints;
   std::array<Eigen::Vector3d, kBallCount> balls_mm;    // in the last link's frame (after L6)
@@ -95,7 +99,8 @@ double paramInterfaceValue(const ParamVector& params, int index);
 int paramIndexByName(const std::string& name);
 
 ParamVector toParams(const Model& model);
-// A copy of `base` (names, limits, balls, chucks) with its 54 parameters replaced.
+// A copy of `base` (names, limits, balls, chucks) with its 54 parameters replaced and no
+// covariance (it belongs to the parameters it came with).
 Model withParams(const Model& base, const ParamVector& params);
 
 Eigen::Isometry3d linkTransform(const LinkParams& link);

@@ -5,6 +5,7 @@
 
 #include <robocal/kinematics/sample.hpp>
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -64,6 +65,21 @@ struct ModelUncertainty {
   int seed = 1;
 };
 
+// Where the user works (docs/compensation.md): tool poses drawn uniformly from a box in the world
+// (chuck fixture) frame and ranges of the tool's ZYX angles, `poses` of them that the nominal
+// model reaches, from `seed`. Accuracy is judged over these poses (robocal accuracy, the fit's
+// report). The defaults cover the reference cell's working area near the chucks, tool pointing
+// away from the robot and down as in the calibration's shells.
+struct WorkVolume {
+  std::array<double, 3> box_min_mm = {-250, -250, 150};
+  std::array<double, 3> box_max_mm = {150, 250, 400};
+  std::array<double, 2> rz_range_deg = {-30, 30};
+  std::array<double, 2> ry_range_deg = {120, 150};
+  std::array<double, 2> rx_range_deg = {-30, 30};
+  int poses = 200;
+  int seed = 1;
+};
+
 struct CellConfig {
   std::string name;
   BarSettings bar;
@@ -77,6 +93,7 @@ struct CellConfig {
   SafetyMargins margins;
   MotionSettings motion;
   ModelUncertainty uncertainty;
+  WorkVolume work_volume;
 };
 
 // Latitudes and longitudes of the grid (deg), in increasing order; empty when the grid is empty.

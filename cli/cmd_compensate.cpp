@@ -1,0 +1,110 @@
+// robocal compensate: corrected joint readings for target poses or for a program's nominal joints,
+// with a calibrated model (compensation/, docs/compensation.md).
+#include "args.hpp"
+
+#include <robocal/compensation/targets.hpp>
+#include <robocal/formats/model_json.hpp>
+#include <robocal/kinematics/puma560.hpp>
+
+#include <cstdio>
+
+namespace robocal::cli {
+namespace {
+
+constexpr const char* kHelp =
+    R"(usage: robocal compensate --model CALIBRATED --targets FILE --out FILE
+                          [--nominal NOMINAL] [--tool x,y,z,rz,ry,rx] [--format csv|val2|val2-move]
+
+Corrected joint readings that put the real robot's tool at each target, computed with the
+calibrated model instead of the nominal one the controller uses. Frames (docs/compensation.md):
+world = the chuck fixture's frame; tool = the ball fixture's frame (the last link's), times --tool.
+
+The targets CSV (a header row; # comments) takes one of two forms, found by its header:
+  x_mm,y_mm,z_mm,rz_deg,ry_deg,rx_deg   desired tool poses, Trans(x,y,z) Rz Ry Rx; optional
+                                         config column (e.g. right-up-noflip)
+  j1,j2,j3,j4,j5,j6                      a program's readings (deg) computed with the nominal
+                                         model: each is moved to where the program meant it
+and an optional name column. Each output row keeps the nominal solution's arm configuration and
+joint turns; its status is ok, unreachable, near_singularity or outside_limits, and only ok and
+near_singularity rows carry joints.
+
+  --model FILE          calibrated model (robocal solve --out, or robocald's)          required
+  --targets FILE        targets CSV                                                     required
+  --out FILE            output to write                                                 required
+  --nominal FILE        the controller's model                 [the PUMA 560 nominal of robocal]
+  --tool X,Y,Z,RZ,RY,RX tool centre point in the ball fixture's frame (mm, deg)       [0,...]
+  --format F            csv: name,j1..j6,predicted_error_mm,status,config,note          [csv]
+                        val2: one VAL II precision point #PPOINT(j1, ..., j6) per line
+                        val2-move: DO MOVE #PPOINT(...) lines
+                        (rows that cannot be commanded become ; comment lines)
+
+exit status: 0 every target ok, 1 an unreadable input, 2 a usage error,
+             3 written, but some targets are not ok (listed on stderr)
+)";
+
+constexpr int kExitSomeNotOk = 3;
+
+int run(const std::vector<std::string>& argv) {
+  const Args args(argv, {"model", "targets", "out", "nominal", "tool", "format"}, {"help"});
+  if (args.flag("help")) {
+    std::fputs(kHelp, stdout);
+    return 0;
+  }
+  const Model calibrated = loadModelFile(args.required("model"));
+  const std::string targets_path = args.required("targets");
+  const std::string out_path = args.required("out");
+  const Model nominal =
+      args.has("nominal") ? loadModelFile(args.get("nominal", "")) : puma560NominalModel();
+  CompensationOptions options;
+  if (args.has("tool")) {
+    const auto tool = parsePoseText(args.get("tool", ""));
+    if (!tool) throw UsageError("--tool: expected x,y,z,rz,ry,rx (mm, deg)");
+    options.tool = *tool;
+  }
+  const auto format = parseOutputFormat(args.get("format", "csv"));
+  if (!format) throw UsageError("--format: expected csv, val2 or val2-move");
+  if (!args.has("nominal")) {
+    std::fprintf(stderr, "robocal compensate: nominal: the built-in %s (--nominal names yours)\n",
+                 nominal.name.c_str());
+    if (calibrated.provenance && calibrated.provenance->nominal_name != nominal.name)
+      std::fprintf(stderr,
+                   "robocal compensate: warning: %s was fitted from \"%s\", not from the "
+                   "built-in nominal: give --nominal\n",
+                   args.get("model", "").c_str(), calibrated.provenance->nominal_name.c_str());
+  }
+  if (!calibrated.covariance)
+    std::fprintf(stderr,
+                 "robocal compensate: note: %s has no covariance: predicted_error_mm stays "
+                 "empty (models fitted by this robocal carry one)\n",
+                 args.get("model", "").c_str());
+
+  const TargetFile file = loadTargetsFile(targets_path);
+  const Compensator compensator(nominal, calibrated, options);
+  std::vector<CompensatedTarget> results;
+  size_t not_ok = 0;
+  double worst_shift_deg = 0;
+  for (const Target& t : file.targets) {
+    results.push_back(compensateTarget(compensator, t));
+    const CompensatedTarget& r = results.back();
+    if (!r.ok()) {
+      ++not_ok;
+      std::fprintf(stderr, "%s:%d: %s%s%s: %s\n", targets_path.c_str(), t.line, t.name.c_str(),
+                   t.name.empty() ? "" : ": ", compensationStatusName(r.status), r.reason.c_str());
+    } else {
+      worst_shift_deg =
+          std::max(worst_shift_deg, (r.joints_deg - r.nominal_joints_deg).cwiseAbs().maxCoeff());
+    }
+  }
+  writeTextFileAtomic(out_path, formatCompensated(file, results, *format));
+  std::printf("%zu targets (%s form): %zu ok, %zu not ok; largest joint correction %.4f deg\n",
+              results.size(), file.joints_form ? "joints" : "pose", results.size() - not_ok, not_ok,
+              worst_shift_deg);
+  std::printf("wrote %s\n", out_path.c_str());
+  return not_ok ? kExitSomeNotOk : 0;
+}
+
+const RegisterCommand registered(
+    {"compensate", "corrected joint targets from a calibrated model", run});
+
+}  // namespace
+}  // namespace robocal::cli

@@ -1,0 +1,58 @@
+// Accuracy where the user works (docs/compensation.md): tool poses over a work volume, each
+// compensated, with the calibrated model's predicted error (its covariance; needs no truth) and,
+// in simulation, the true robot's error when it is commanded with the nominal joints and with the
+// compensated ones. Math only; accuracy_report.hpp writes the results.
+#pragma once
+
+#include <robocal/compensation/compensate.hpp>
+#include <robocal/planner/cell.hpp>
+
+#include <optional>
+#include <vector>
+
+namespace robocal {
+
+// `work.poses` tool poses (world frame) drawn from the box and the angle ranges with `work.seed`,
+// keeping those that compensate with status ok (compensator.forPose: the nominal model reaches
+// them in some configuration, away from singularities, and so does the calibrated one). Throws
+// std::invalid_argument when fewer than one in fifty draws is reachable (the volume is mostly out
+// of the arm's reach: say so rather than loop).
+std::vector<Eigen::Isometry3d> workVolumePoses(const WorkVolume& work,
+                                               const Compensator& compensator);
+
+struct ErrorStats {
+  size_t count = 0;
+  double rms = 0;
+  double p95 = 0;  // nearest-rank 95th percentile
+  double max = 0;
+};
+ErrorStats errorStats(std::vector<double> values);
+
+struct PoseAccuracy {
+  CompensatedTarget target;
+  // Against the truth (simulation only): where the true robot's tool is when commanded with the
+  // nominal readings and with the compensated ones, against the target; and the calibrated
+  // model's own error there (true tool pose against the calibrated model's, at the compensated
+  // readings).
+  PoseDifference nominal_commanded, compensated_commanded, calibrated_model;
+};
+
+struct AccuracyReport {
+  std::string poses_from;  // "work volume of cell.json" or the poses file
+  size_t requested = 0;    // targets given
+  size_t ok = 0;           // of which compensated with status ok (the statistics are over them)
+  std::vector<PoseAccuracy> poses;  // every target, in order
+  ErrorStats predicted_position_mm, predicted_orientation_deg;
+  bool has_truth = false;
+  ErrorStats nominal_position_mm, nominal_orientation_deg;
+  ErrorStats compensated_position_mm, compensated_orientation_deg;
+  ErrorStats calibrated_model_position_mm, calibrated_model_orientation_deg;
+};
+
+// Compensates every target pose and gathers the statistics over those with status ok. `truth`,
+// when given, is the true robot of a simulation.
+AccuracyReport assessAccuracy(const Compensator& compensator,
+                              const std::vector<Eigen::Isometry3d>& targets,
+                              const Model* truth = nullptr);
+
+}  // namespace robocal

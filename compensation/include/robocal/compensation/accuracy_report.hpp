@@ -1,0 +1,27 @@
+// The outputs of an accuracy assessment (accuracy.hpp), the same for `robocal accuracy`,
+// `robocal solve --report` and robocald's RESULT: the statistics as JSON (keys name their units),
+// as text for a terminal, and an SVG map of the error over the work volume.
+#pragma once
+
+#include <robocal/compensation/accuracy.hpp>
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace robocal {
+
+// {"poses_from", "poses", "ok", "predicted_position_error_mm": {"rms", "p95", "max"},
+//  "predicted_orientation_error_deg": {...}, and with a truth "nominal_commanded_position_error_mm",
+//  "compensated_commanded_...", "calibrated_model_..." (position and orientation)}; with
+// `per_pose`, also "per_pose": one object per target (pose, status, joints, errors).
+nlohmann::ordered_json accuracyJson(const AccuracyReport& report, bool per_pose = false);
+
+// Lines for a terminal, each statistic with its unit.
+std::string accuracyText(const AccuracyReport& report);
+
+// The targets seen from above (x, y in the world frame), each a dot coloured by its error: the
+// predicted error, and with a truth the true error commanded with the nominal and with the
+// compensated readings, one panel each, each with its own colour scale.
+std::string accuracySvg(const AccuracyReport& report);
+
+}  // namespace robocal

@@ -1,0 +1,118 @@
+// Compensation: the joint readings that put the real robot's tool where a target says, computed
+// with the calibrated model instead of the nominal one the controller believes in
+// (docs/compensation.md). Math only; no I/O.
+//
+// Frames, the contract of every compensation interface:
+// - world: the chuck fixture's frame (the frame of the model's `chucks`);
+// - tool: the last link's frame (after L6, the ball fixture's frame, where the model's `balls` are
+//   given) times an optional tool centre point `tool` given in that frame.
+// A pose as text is x_mm, y_mm, z_mm, rz_deg, ry_deg, rx_deg = Trans(x, y, z) Rz Ry Rx, as the
+// links (linkTransform).
+//
+// A target is solved in the nominal model first (what the controller would be told without
+// compensation; it fixes the arm configuration and each joint's 360-degree turn), then in the
+// calibrated model from the nominal solution, so the corrected readings stay in that
+// configuration and turn.
+#pragma once
+
+#include <robocal/kinematics/model.hpp>
+#include <robocal/planner/puma_ik.hpp>
+
+#include <optional>
+#include <string>
+
+namespace robocal {
+
+// x, y, z in mm and ZYX angles in deg, as a link: Trans(x, y, z) Rz(rz) Ry(ry) Rx(rx).
+Eigen::Isometry3d poseFromXyzZyx(double x_mm, double y_mm, double z_mm, double rz_deg,
+                                 double ry_deg, double rx_deg);
+
+// "x,y,z,rz,ry,rx" (mm, deg) as above; nullopt when it is not six finite numbers.
+std::optional<Eigen::Isometry3d> parsePoseText(const std::string& text);
+
+enum class CompensationStatus {
+  kOk,
+  kUnreachable,       // no configuration reaches the pose, or the solution did not converge
+  kNearSingularity,   // solved, but within the singularity margins: small errors, large motions
+  kOutsideLimits,     // solved, but no turn of some joint lies inside its limits
+};
+// "ok", "unreachable", "near_singularity", "outside_limits": the files' and protocol's words.
+const char* compensationStatusName(CompensationStatus status);
+
+struct CompensationOptions {
+  Eigen::Isometry3d tool = Eigen::Isometry3d::Identity();  // TCP in the last link's frame
+  // The calibrated solution must reach the target this closely, else the status says why not.
+  double position_tolerance_mm = 1e-4;
+  double angle_tolerance_rad = 1e-6;
+  // Closer than these to a singularity (PumaIk::singularityMargins) is near_singularity.
+  double wrist_singularity_deg = 2.0;
+  double elbow_singularity_deg = 2.0;
+  double shoulder_singularity_mm = 20.0;
+};
+
+struct CompensatedTarget {
+  CompensationStatus status = CompensationStatus::kUnreachable;
+  std::string reason;  // why the status is not ok, in words; empty when ok
+  ArmConfig config;
+  Eigen::Isometry3d target = Eigen::Isometry3d::Identity();  // the desired tool pose (world)
+  JointsDeg nominal_joints_deg = JointsDeg::Zero();  // the nominal model's solution
+  JointsDeg joints_deg = JointsDeg::Zero();          // corrected readings (the calibrated model's)
+  // 1-sigma tool position (mm) and orientation (deg) error of the calibrated model at the
+  // corrected readings, from its covariance; NaN when the model has none.
+  double predicted_position_error_mm = 0;
+  double predicted_orientation_error_deg = 0;
+  double position_residual_mm = 0;  // |calibrated tool pose - target| at joints_deg
+  double angle_residual_deg = 0;
+  bool ok() const { return status == CompensationStatus::kOk; }
+};
+
+class Compensator {
+ public:
+  // Throws std::invalid_argument when a model is not a PUMA-like chain (PumaIk).
+  Compensator(const Model& nominal, const Model& calibrated, CompensationOptions options = {});
+
+  const Model& nominal() const { return nominal_.model(); }
+  const Model& calibrated() const { return calibrated_.model(); }
+  const CompensationOptions& options() const { return options_; }
+
+  // A desired tool pose in the world frame, in `config`; without one, the first of the eight
+  // configurations (armConfigFromIndex order) whose nominal solution is within the limits and
+  // away from the singularities.
+  CompensatedTarget forPose(const Eigen::Isometry3d& tool_pose,
+                            std::optional<ArmConfig> config = std::nullopt) const;
+  // A program's readings computed with the nominal model: the pose they mean (the nominal tool
+  // pose there), reached with the calibrated model in the same configuration and turns. When
+  // the two models are equal, the readings come back unchanged.
+  CompensatedTarget forNominalJoints(const JointsDeg& readings_deg) const;
+
+  // The tool pose (world frame) a model puts at these readings.
+  Eigen::Isometry3d nominalToolPose(const JointsDeg& readings_deg) const;
+  Eigen::Isometry3d calibratedToolPose(const JointsDeg& readings_deg) const;
+
+  // The calibrated model's 1-sigma tool position error (mm) and orientation error (deg) at these
+  // readings, from its covariance; NaN when it has none.
+  double predictedPositionError(const JointsDeg& readings_deg) const;
+  double predictedOrientationError(const JointsDeg& readings_deg) const;
+
+ private:
+  CompensatedTarget solveCalibrated(CompensatedTarget t) const;
+  // The status a solution gets from PumaIk's status and the singularity margins.
+  CompensationStatus classify(const PumaIk& ik, const IkSolution& s, std::string& reason) const;
+
+  PumaIk nominal_, calibrated_;
+  CompensationOptions options_;
+  Eigen::Isometry3d tool_inverse_;
+  // The covariance restricted to the estimated parameters, and their indices.
+  std::vector<int> estimated_;
+  Eigen::MatrixXd covariance_;
+};
+
+// Position and orientation distance between two poses: |t_a - t_b| (mm) and the angle of
+// R_a R_b^T (deg).
+struct PoseDifference {
+  double position_mm = 0;
+  double angle_deg = 0;
+};
+PoseDifference poseDifference(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b);
+
+}  // namespace robocal

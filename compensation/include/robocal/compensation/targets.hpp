@@ -1,0 +1,49 @@
+// The files of `robocal compensate` (docs/compensation.md):
+// - the targets CSV, in one of two forms found by its header: desired tool poses
+//   (x_mm,y_mm,z_mm,rz_deg,ry_deg,rx_deg, optional config) or a program's nominal joints
+//   (j1..j6, controller readings in deg); both take an optional name column;
+// - the output: CSV (name, j1..j6, predicted_error_mm, status, then config and note), or VAL II
+//   precision points, `#PPOINT(j1, ..., j6)` or `DO MOVE #PPOINT(...)` lines.
+// Malformed rows are FormatError naming file:line and the problem.
+#pragma once
+
+#include <robocal/compensation/compensate.hpp>
+#include <robocal/formats/error.hpp>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace robocal {
+
+struct Target {
+  std::string name;                        // "" when the file has no name column
+  std::optional<Eigen::Isometry3d> pose;   // the pose form: desired tool pose (world frame)
+  std::optional<ArmConfig> config;         // the pose form's optional config column
+  std::optional<JointsDeg> nominal_joints; // the joints form
+  int line = 0;                            // 1-based line in the file
+};
+
+struct TargetFile {
+  std::string source;
+  bool has_names = false;
+  bool joints_form = false;
+  std::vector<Target> targets;
+};
+
+TargetFile parseTargets(const std::string& text, const std::string& source = "targets");
+TargetFile loadTargetsFile(const std::string& path);
+
+// Compensates one target (the form decides which Compensator call).
+CompensatedTarget compensateTarget(const Compensator& compensator, const Target& target);
+
+enum class OutputFormat { kCsv, kVal2Points, kVal2Moves };
+// "csv", "val2", "val2-move"; nullopt for another word.
+std::optional<OutputFormat> parseOutputFormat(const std::string& word);
+
+// The output text. Rows whose status is unreachable or outside_limits carry no joints (CSV: empty
+// j1..j6; VAL II: a `;` comment line), so that nothing that cannot be reached is ever commanded.
+std::string formatCompensated(const TargetFile& file, const std::vector<CompensatedTarget>& results,
+                              OutputFormat format);
+
+}  // namespace robocal

@@ -1,0 +1,103 @@
+#include <robocal/compensation/accuracy.hpp>
+
+#include <robocal/kinematics/kinematics.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <stdexcept>
+
+namespace robocal {
+
+std::vector<Eigen::Isometry3d> workVolumePoses(const WorkVolume& work,
+                                               const Compensator& compensator) {
+  std::mt19937_64 rng(static_cast<std::uint64_t>(work.seed));
+  auto uniform = [&](double lo, double hi) {
+    return std::uniform_real_distribution<double>(lo, hi)(rng);
+  };
+  std::vector<Eigen::Isometry3d> poses;
+  const long max_draws = 50L * work.poses;
+  for (long draw = 0; draw < max_draws && static_cast<int>(poses.size()) < work.poses; ++draw) {
+    const Eigen::Isometry3d pose = poseFromXyzZyx(
+        uniform(work.box_min_mm[0], work.box_max_mm[0]),
+        uniform(work.box_min_mm[1], work.box_max_mm[1]),
+        uniform(work.box_min_mm[2], work.box_max_mm[2]),
+        uniform(work.rz_range_deg[0], work.rz_range_deg[1]),
+        uniform(work.ry_range_deg[0], work.ry_range_deg[1]),
+        uniform(work.rx_range_deg[0], work.rx_range_deg[1]));
+    // Reachable by the nominal model: the controller could be commanded there at all.
+    const CompensatedTarget t = compensator.forPose(pose);
+    if (t.ok()) poses.push_back(pose);
+  }
+  if (static_cast<int>(poses.size()) < work.poses)
+    throw std::invalid_argument(
+        "work_volume: only " + std::to_string(poses.size()) + " of " + std::to_string(max_draws) +
+        " poses drawn from the box and angle ranges are reachable (wanted " +
+        std::to_string(work.poses) + "): move the box or the angle ranges into the arm's reach");
+  return poses;
+}
+
+ErrorStats errorStats(std::vector<double> values) {
+  ErrorStats s;
+  s.count = values.size();
+  if (values.empty()) return s;
+  double sum_sq = 0;
+  for (double v : values) sum_sq += v * v;
+  s.rms = std::sqrt(sum_sq / static_cast<double>(values.size()));
+  std::sort(values.begin(), values.end());
+  s.max = values.back();
+  const size_t rank = static_cast<size_t>(std::ceil(0.95 * static_cast<double>(values.size())));
+  s.p95 = values[std::max<size_t>(rank, 1) - 1];
+  return s;
+}
+
+AccuracyReport assessAccuracy(const Compensator& compensator,
+                              const std::vector<Eigen::Isometry3d>& targets, const Model* truth) {
+  AccuracyReport r;
+  r.requested = targets.size();
+  r.has_truth = truth != nullptr;
+  std::optional<Kinematics> true_kin;
+  if (truth) true_kin.emplace(*truth);
+  const Eigen::Isometry3d& tool = compensator.options().tool;
+  std::vector<double> pred_pos, pred_ori, nom_pos, nom_ori, comp_pos, comp_ori, model_pos,
+      model_ori;
+  for (const Eigen::Isometry3d& pose : targets) {
+    PoseAccuracy a;
+    a.target = compensator.forPose(pose);
+    if (true_kin) {
+      const Eigen::Isometry3d at_nominal = true_kin->toolPose(a.target.nominal_joints_deg) * tool;
+      const Eigen::Isometry3d at_compensated = true_kin->toolPose(a.target.joints_deg) * tool;
+      a.nominal_commanded = poseDifference(at_nominal, pose);
+      a.compensated_commanded = poseDifference(at_compensated, pose);
+      a.calibrated_model =
+          poseDifference(at_compensated, compensator.calibratedToolPose(a.target.joints_deg));
+    }
+    if (a.target.ok()) {
+      ++r.ok;
+      pred_pos.push_back(a.target.predicted_position_error_mm);
+      pred_ori.push_back(a.target.predicted_orientation_error_deg);
+      nom_pos.push_back(a.nominal_commanded.position_mm);
+      nom_ori.push_back(a.nominal_commanded.angle_deg);
+      comp_pos.push_back(a.compensated_commanded.position_mm);
+      comp_ori.push_back(a.compensated_commanded.angle_deg);
+      model_pos.push_back(a.calibrated_model.position_mm);
+      model_ori.push_back(a.calibrated_model.angle_deg);
+    }
+    r.poses.push_back(a);
+  }
+  if (compensator.calibrated().covariance) {
+    r.predicted_position_mm = errorStats(pred_pos);
+    r.predicted_orientation_deg = errorStats(pred_ori);
+  }
+  if (truth) {
+    r.nominal_position_mm = errorStats(nom_pos);
+    r.nominal_orientation_deg = errorStats(nom_ori);
+    r.compensated_position_mm = errorStats(comp_pos);
+    r.compensated_orientation_deg = errorStats(comp_ori);
+    r.calibrated_model_position_mm = errorStats(model_pos);
+    r.calibrated_model_orientation_deg = errorStats(model_ori);
+  }
+  return r;
+}
+
+}  // namespace robocal

@@ -1,0 +1,183 @@
+#include <robocal/compensation/targets.hpp>
+
+#include <robocal/formats/csv.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+
+namespace robocal {
+namespace {
+
+constexpr std::array<const char*, 6> kPoseColumns = {"x_mm",   "y_mm",   "z_mm",
+                                                     "rz_deg", "ry_deg", "rx_deg"};
+constexpr std::array<const char*, 6> kJointColumns = {"j1", "j2", "j3", "j4", "j5", "j6"};
+
+struct Header {
+  int name = -1, config = -1;
+  std::array<int, 6> values{};  // pose or joint columns, by field index
+  size_t fields = 0;
+};
+
+int columnOf(const std::vector<std::string_view>& fields, const char* name) {
+  for (size_t f = 0; f < fields.size(); ++f)
+    if (fields[f] == name) return static_cast<int>(f);
+  return -1;
+}
+
+Header readHeader(const std::vector<std::string_view>& fields, bool& joints_form,
+                  const std::string& where) {
+  Header h;
+  h.fields = fields.size();
+  int pose_found = 0, joint_found = 0;
+  for (const char* c : kPoseColumns) pose_found += columnOf(fields, c) >= 0;
+  for (const char* c : kJointColumns) joint_found += columnOf(fields, c) >= 0;
+  if (pose_found && joint_found)
+    throw FormatError(where + "the header has pose columns (x_mm ...) and joint columns (j1 ...): "
+                              "give one form per file");
+  if (!pose_found && !joint_found)
+    throw FormatError(where +
+                      "the header names neither the pose columns x_mm,y_mm,z_mm,rz_deg,ry_deg,"
+                      "rx_deg nor the joint columns j1,j2,j3,j4,j5,j6");
+  joints_form = joint_found > 0;
+  const auto& wanted = joints_form ? kJointColumns : kPoseColumns;
+  for (size_t k = 0; k < wanted.size(); ++k) {
+    h.values[k] = columnOf(fields, wanted[k]);
+    if (h.values[k] < 0)
+      throw FormatError(where + "the header has no column '" + wanted[k] + "'");
+  }
+  h.name = columnOf(fields, "name");
+  h.config = columnOf(fields, "config");
+  if (h.config >= 0 && joints_form)
+    throw FormatError(where + "column 'config': only for poses (joints fix the configuration)");
+  for (size_t f = 0; f < fields.size(); ++f) {
+    const bool known = static_cast<int>(f) == h.name || static_cast<int>(f) == h.config ||
+                       std::find(h.values.begin(), h.values.end(), static_cast<int>(f)) !=
+                           h.values.end();
+    if (!known)
+      throw FormatError(where + "unknown column '" + std::string(fields[f]) +
+                        "' (see docs/compensation.md)");
+  }
+  return h;
+}
+
+std::string fixed(double v, int decimals) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  return buf;
+}
+
+// Free text for a CSV field: the reader splits at commas and has no quoting.
+std::string csvText(std::string text) {
+  for (char& c : text)
+    if (c == ',' || c == '\n') c = ';';
+  return text;
+}
+
+bool hasJoints(const CompensatedTarget& r) {
+  return r.status == CompensationStatus::kOk || r.status == CompensationStatus::kNearSingularity;
+}
+
+}  // namespace
+
+TargetFile parseTargets(const std::string& text, const std::string& source) {
+  TargetFile file;
+  file.source = source;
+  std::optional<Header> header;
+  csv::forEachLine(text, [&](int line_no, std::string_view line) {
+    const auto fields = csv::splitFields(line);
+    const std::string where = source + ":" + std::to_string(line_no) + ": ";
+    if (!header) {
+      header = readHeader(fields, file.joints_form, where);
+      file.has_names = header->name >= 0;
+      return;
+    }
+    if (fields.size() != header->fields)
+      throw FormatError(where + "expected " + std::to_string(header->fields) + " fields, got " +
+                        std::to_string(fields.size()));
+    const auto& names = file.joints_form ? kJointColumns : kPoseColumns;
+    std::array<double, 6> v{};
+    for (size_t k = 0; k < v.size(); ++k) {
+      const std::string_view field = fields[header->values[k]];
+      const std::optional<double> value = csv::number(field);
+      if (!value)
+        throw FormatError(where + "column '" + names[k] + "': not a finite number: '" +
+                          std::string(field) + "'");
+      v[k] = *value;
+    }
+    Target t;
+    t.line = line_no;
+    if (header->name >= 0) t.name = std::string(fields[header->name]);
+    if (file.joints_form) {
+      t.nominal_joints = JointsDeg(v.data());
+    } else {
+      t.pose = poseFromXyzZyx(v[0], v[1], v[2], v[3], v[4], v[5]);
+      if (header->config >= 0 && !fields[header->config].empty()) {
+        const std::string word(fields[header->config]);
+        t.config = parseArmConfig(word);
+        if (!t.config)
+          throw FormatError(where + "column 'config': unknown arm configuration '" + word +
+                            "' (like right-up-noflip: right|left, up|down, noflip|flip)");
+      }
+    }
+    file.targets.push_back(std::move(t));
+  });
+  if (!header) throw FormatError(source + ": empty: no header row (see docs/compensation.md)");
+  return file;
+}
+
+TargetFile loadTargetsFile(const std::string& path) {
+  return parseTargets(readTextFile(path), path);
+}
+
+CompensatedTarget compensateTarget(const Compensator& compensator, const Target& target) {
+  if (target.nominal_joints) return compensator.forNominalJoints(*target.nominal_joints);
+  return compensator.forPose(*target.pose, target.config);
+}
+
+std::optional<OutputFormat> parseOutputFormat(const std::string& word) {
+  if (word == "csv") return OutputFormat::kCsv;
+  if (word == "val2") return OutputFormat::kVal2Points;
+  if (word == "val2-move") return OutputFormat::kVal2Moves;
+  return std::nullopt;
+}
+
+std::string formatCompensated(const TargetFile& file, const std::vector<CompensatedTarget>& results,
+                              OutputFormat format) {
+  std::string out;
+  if (format == OutputFormat::kCsv) {
+    if (file.has_names) out += "name,";
+    out += "j1,j2,j3,j4,j5,j6,predicted_error_mm,status,config,note\n";
+  } else {
+    out += "; robocal compensate: corrected joint readings (deg) of " + file.source + "\n";
+  }
+  for (size_t i = 0; i < results.size(); ++i) {
+    const CompensatedTarget& r = results[i];
+    const std::string& name = file.targets[i].name;
+    const bool joints = hasJoints(r);
+    const std::string predicted =
+        std::isnan(r.predicted_position_error_mm) ? "" : fixed(r.predicted_position_error_mm, 4);
+    if (format == OutputFormat::kCsv) {
+      if (file.has_names) out += name + ",";
+      for (int j = 0; j < kJointCount; ++j) out += (joints ? fixed(r.joints_deg[j], 10) : "") + ",";
+      out += predicted + "," + compensationStatusName(r.status) + "," + armConfigName(r.config) +
+             "," + csvText(r.reason) + "\n";
+      continue;
+    }
+    const std::string label = name.empty() ? "line " + std::to_string(file.targets[i].line) : name;
+    if (!joints) {
+      out += "; " + label + ": " + compensationStatusName(r.status) + ": " + r.reason + "\n";
+      continue;
+    }
+    if (r.status != CompensationStatus::kOk)
+      out += "; " + label + ": " + compensationStatusName(r.status) + ": " + r.reason + "\n";
+    std::string point = "#PPOINT(";
+    for (int j = 0; j < kJointCount; ++j) point += (j ? ", " : "") + fixed(r.joints_deg[j], 4);
+    point += ")";
+    out += (format == OutputFormat::kVal2Moves ? "DO MOVE " : "") + point + "\n";
+  }
+  return out;
+}
+
+}  // namespace robocal
