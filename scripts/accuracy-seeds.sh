@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# The acceptance figures of docs/compensation.md: for each seed, a true robot from
+# `robocal simulate`'s defaults, the default plan's data (config/cell.json) with the paper's noise
+# (0.084 mm), a fit, and the accuracy over the reference work volume against the truth: the true
+# robot commanded with the nominal joints and with the compensated joints. Prints one table row a
+# seed and the worst case. Usage: scripts/accuracy-seeds.sh [SEEDS (default 10)]
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+build=${ROBOCAL_BUILD_DIR:-$root/build}
+bin=$build/cli/robocal
+seeds=${1:-10}
+model=$root/config/puma560.json
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+"$bin" plan --model "$model" --cell "$root/config/cell.json" --out "$work/plan.json" >/dev/null
+echo "| seed | samples | fit RMS (mm) | nominal joints RMS / p95 (mm) | compensated RMS / p95 / max (mm) | ratio | model's own RMS (mm) | predicted RMS (mm) | orientation nominal / compensated RMS (deg) |"
+echo "|---|---|---|---|---|---|---|---|---|"
+for seed in $(seq 1 "$seeds"); do
+  "$bin" simulate --model "$model" --plan "$work/plan.json" --seed "$seed" --noise-mm 0.084 \
+    --out "$work/s.csv" --truth-out "$work/truth.json" >/dev/null
+  "$bin" solve --model "$model" "$work/s.csv" --out "$work/cal.json" --json >"$work/fit.json"
+  "$bin" accuracy --nominal "$model" --calibrated "$work/cal.json" --truth "$work/truth.json" \
+    --json >"$work/acc.json"
+  jq -r --argjson seed "$seed" --slurpfile fit "$work/fit.json" '
+    def f(x): (x * 10000 | round) / 10000;
+    "| \($seed) | \($fit[0].n) | \(f($fit[0].rms_mm)) | \(f(.nominal_commanded_position_error_mm.rms)) / \(f(.nominal_commanded_position_error_mm.p95)) | \(f(.compensated_commanded_position_error_mm.rms)) / \(f(.compensated_commanded_position_error_mm.p95)) / \(f(.compensated_commanded_position_error_mm.max)) | \((.nominal_commanded_position_error_mm.rms / .compensated_commanded_position_error_mm.rms * 10 | round) / 10) | \(f(.calibrated_model_position_error_mm.rms)) | \(f(.predicted_position_error_mm.rms)) | \(f(.nominal_commanded_orientation_error_deg.rms)) / \(f(.compensated_commanded_orientation_error_deg.rms)) |"' \
+    "$work/acc.json"
+done

@@ -1,0 +1,102 @@
+// robocal compensate and robocal accuracy, run as a user runs them.
+#include <catch2/catch.hpp>
+
+#include "cli_helpers.hpp"
+
+#include <robocal/formats/csv.hpp>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+using namespace robocal::test;
+using Catch::Matchers::Contains;
+
+namespace {
+
+void writeFile(const std::string& path, const std::string& text) {
+  std::ofstream(path) << text;
+}
+
+std::string readFile(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+}  // namespace
+
+TEST_CASE("[cli] robocal compensate returns a program's own joints when nothing was calibrated") {
+  TempDir dir;
+  const char* rows[] = {"a,12.3456789012,-33.25,-171.5,-20.125,40.5,100.0000000001",
+                        "b,-45,60,-140,20,45,30", "c,0.5,10,-170,10,-60,-200"};
+  std::string program = "name,j1,j2,j3,j4,j5,j6\n";
+  for (const char* r : rows) program += std::string(r) + "\n";
+  writeFile(dir / "program.csv", program);
+  const RunResult r = runRobocal("compensate --model " + kModel + " --nominal " + kModel +
+                                 " --targets " + dir / "program.csv" + " --out " +
+                                 dir / "out.csv");
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  CHECK_THAT(r.output, Contains("3 ok, 0 not ok"));
+  const std::string out = readFile(dir / "out.csv");
+  std::istringstream lines(out);
+  std::string line;
+  std::getline(lines, line);
+  CHECK(line == "name,j1,j2,j3,j4,j5,j6,predicted_error_mm,status,config,note");
+  for (const char* row : rows) {
+    REQUIRE(std::getline(lines, line));
+    const auto got = robocal::csv::splitFields(line);
+    const auto want = robocal::csv::splitFields(row);
+    CHECK(got[0] == want[0]);
+    for (int j = 1; j <= 6; ++j)
+      CHECK(std::abs(*robocal::csv::number(got[j]) - *robocal::csv::number(want[j])) < 1e-9);
+    CHECK(got[8] == "ok");
+  }
+}
+
+TEST_CASE("[cli] robocal compensate and accuracy on a simulated calibration") {
+  TempDir dir;
+  REQUIRE(runRobocal("simulate --model " + kModel + " --seed 3 --points-per-shell 40 --out " +
+                     dir / "s.csv" + " --truth-out " + dir / "truth.json")
+              .exit_code == 0);
+  REQUIRE(runRobocal("solve --model " + kModel + " " + dir / "s.csv" + " --out " +
+                     dir / "cal.json")
+              .exit_code == 0);
+  SECTION("accuracy over the reference work volume, with the truth") {
+    const RunResult r = runRobocal("accuracy --nominal " + kModel + " --calibrated " +
+                                   dir / "cal.json" + " --truth " + dir / "truth.json" +
+                                   " --json --svg " + dir / "map.svg");
+    REQUIRE(r.exit_code == 0);
+    const auto j = nlohmann::json::parse(r.output);
+    CHECK(j["ok"] == 200);
+    const double nominal = j["nominal_commanded_position_error_mm"]["rms"];
+    const double compensated = j["compensated_commanded_position_error_mm"]["rms"];
+    CHECK(compensated < nominal / 5);
+    CHECK(j["predicted_position_error_mm"]["rms"].get<double>() > 0);
+    CHECK(j["per_pose"].size() == 200);
+    CHECK_THAT(readFile(dir / "map.svg"), Contains("<svg"));
+  }
+  SECTION("compensate writes VAL II points, and malformed rows are named") {
+    writeFile(dir / "poses.csv",
+              "name,x_mm,y_mm,z_mm,rz_deg,ry_deg,rx_deg\nhome,0,0,250,0,135,0\n"
+              "away,5000,0,0,0,0,0\n");
+    RunResult r = runRobocal("compensate --model " + dir / "cal.json" + " --nominal " + kModel +
+                             " --targets " + dir / "poses.csv" + " --out " + dir / "p.val2" +
+                             " --format val2-move");
+    INFO(r.output);
+    CHECK(r.exit_code == 3);
+    CHECK_THAT(r.output, Contains("poses.csv:3: away: unreachable"));
+    const std::string val2 = readFile(dir / "p.val2");
+    CHECK_THAT(val2, Contains("DO MOVE #PPOINT("));
+    CHECK_THAT(val2, Contains("; away: unreachable"));
+
+    writeFile(dir / "bad.csv", "x_mm,y_mm,z_mm,rz_deg,ry_deg,rx_deg\n1,2,3,4,5\n");
+    r = runRobocal("compensate --model " + dir / "cal.json" + " --nominal " + kModel +
+                   " --targets " + dir / "bad.csv" + " --out " + dir / "never.csv");
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.output, Contains("bad.csv:2: expected 6 fields, got 5"));
+    CHECK_FALSE(std::ifstream(dir / "never.csv").good());
+  }
+}

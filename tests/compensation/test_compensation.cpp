@@ -1,0 +1,282 @@
+// Compensation (compensation/): corrected readings reach the target in the calibrated model, keep
+// the nominal solution's configuration, come back unchanged when the models agree, and make the
+// true robot of a simulation much more accurate over the work volume.
+#include <catch2/catch.hpp>
+
+#include <robocal/compensation/accuracy.hpp>
+#include <robocal/compensation/accuracy_report.hpp>
+#include <robocal/compensation/targets.hpp>
+#include <robocal/formats/model_json.hpp>
+#include <robocal/kinematics/puma560.hpp>
+#include <robocal/planner/cell_json.hpp>
+#include <robocal/sim/measurements.hpp>
+#include <robocal/solver/calibrate.hpp>
+
+#include <random>
+
+using namespace robocal;
+using Catch::Matchers::Contains;
+
+namespace {
+
+Model perturbed(unsigned seed) {
+  std::mt19937_64 rng(seed);
+  return perturbModel(puma560NominalModel(), PerturbationSigmas{}, rng);
+}
+
+// Readings inside the limits and away from the singularities, as a program would hold.
+std::vector<JointsDeg> programJoints(int count, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<JointsDeg> out;
+  while (static_cast<int>(out.size()) < count) {
+    JointsDeg q;
+    q << 40 * u(rng), 45 + 40 * u(rng), -135 + 40 * u(rng), 60 * u(rng), 45 + 30 * u(rng),
+        90 * u(rng);
+    out.push_back(q);
+  }
+  return out;
+}
+
+// A calibration of a perturbed robot from simulated shells (all nine connections, two radii).
+Model calibrate(const Model& nominal, const Model& truth, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::vector<Sample> samples;
+  int shell = 1;
+  for (double extension : {0.0, 150.0})
+    for (const Connection& c : allConnections()) {
+      ShellRequest req;
+      req.connection = c;
+      req.radius_mm = kDefaultBarMm + extension;
+      req.extension_mm = extension;
+      req.points = 40;
+      req.shell = shell++;
+      const auto poses = shellPoses(nominal, req, rng).poses;
+      const auto more = measureShell(truth, req, poses, MeasurementNoise{}, rng);
+      samples.insert(samples.end(), more.begin(), more.end());
+    }
+  const SolveResult fit = solveCalibration(nominal, samples);
+  Model calibrated = withParams(nominal, fit.params);
+  calibrated.covariance = fit.covariance;
+  return calibrated;
+}
+
+}  // namespace
+
+TEST_CASE("a program's joints come back unchanged when the calibrated model is the nominal") {
+  const Model nominal = puma560NominalModel();
+  const Compensator comp(nominal, nominal);
+  for (const JointsDeg& q : programJoints(50, 3)) {
+    const CompensatedTarget t = comp.forNominalJoints(q);
+    INFO(q.transpose());
+    REQUIRE(t.status == CompensationStatus::kOk);
+    CHECK((t.joints_deg - q).cwiseAbs().maxCoeff() < 1e-9);
+  }
+}
+
+TEST_CASE("corrected readings reach the target in the calibrated model, in the same configuration") {
+  const Model nominal = puma560NominalModel();
+  const Model truth = perturbed(7);
+  CompensationOptions options;
+  options.tool = poseFromXyzZyx(10, -20, 150, 0, 15, 0);  // a tool centre point off the axis
+  const Compensator comp(nominal, truth, options);
+  const Kinematics true_kin(truth);
+  int changed = 0;
+  for (const JointsDeg& q : programJoints(40, 5)) {
+    const CompensatedTarget t = comp.forNominalJoints(q);
+    INFO(q.transpose());
+    REQUIRE(t.status == CompensationStatus::kOk);
+    CHECK(t.config == PumaIk(nominal).configOf(q));
+    // The true robot (here the calibrated model itself) puts the tool where the program meant.
+    const PoseDifference d = poseDifference(true_kin.toolPose(t.joints_deg) * options.tool,
+                                            comp.nominalToolPose(q));
+    CHECK(d.position_mm < 1e-4);
+    CHECK(d.angle_deg < 1e-6 * 57.3);
+    CHECK(t.position_residual_mm == Approx(d.position_mm).margin(1e-9));
+    // Compensation moves the joints by about the model error, not by whole turns.
+    const double shift = (t.joints_deg - q).cwiseAbs().maxCoeff();
+    CHECK(shift < 1.0);
+    changed += shift > 1e-3;
+  }
+  CHECK(changed > 30);
+}
+
+TEST_CASE("poses get a status that says why they cannot be compensated") {
+  const Model nominal = puma560NominalModel();
+  const Compensator comp(nominal, perturbed(2));
+  SECTION("out of reach") {
+    const CompensatedTarget t = comp.forPose(poseFromXyzZyx(2000, 0, 300, 0, 135, 0));
+    CHECK(t.status == CompensationStatus::kUnreachable);
+    CHECK_THAT(t.reason, Contains("reach"));
+  }
+  SECTION("near the wrist singularity") {
+    JointsDeg q;
+    q << 10, 60, -140, 20, 0.5, 30;  // joint 5 half a degree from zero
+    const CompensatedTarget t = comp.forNominalJoints(q);
+    CHECK(t.status == CompensationStatus::kNearSingularity);
+    CHECK_THAT(t.reason, Contains("wrist singularity"));
+  }
+  SECTION("a requested configuration the limits forbid") {
+    JointsDeg q;
+    q << 10, 60, -140, 20, 45, 30;
+    const Eigen::Isometry3d pose = comp.nominalToolPose(q);
+    const CompensatedTarget t = comp.forPose(pose, ArmConfig{true, true, false});
+    CHECK(t.status != CompensationStatus::kOk);
+    CHECK_FALSE(t.reason.empty());
+  }
+  SECTION("the first configuration that is ok is chosen without one") {
+    JointsDeg q;
+    q << 10, 60, -140, 20, 45, 30;
+    const CompensatedTarget t = comp.forPose(comp.nominalToolPose(q));
+    CHECK(t.status == CompensationStatus::kOk);
+    CHECK(t.position_residual_mm < 1e-4);
+  }
+}
+
+TEST_CASE("over the work volume, compensation makes a simulated robot at least 10x more accurate") {
+  const Model nominal = puma560NominalModel();
+  const Model truth = perturbed(11);
+  const Model calibrated = calibrate(nominal, truth, 11);
+  const Compensator comp(nominal, calibrated);
+  WorkVolume work;
+  work.poses = 60;
+  const auto poses = workVolumePoses(work, comp);
+  REQUIRE(poses.size() == 60);
+  const AccuracyReport r = assessAccuracy(comp, poses, &truth);
+  CHECK(r.ok == 60);
+  INFO(accuracyText(r));
+  CHECK(r.nominal_position_mm.rms > 0.3);
+  CHECK(r.compensated_position_mm.rms < r.nominal_position_mm.rms / 10);
+  CHECK(r.compensated_position_mm.p95 < 0.25);
+  // The compensation adds nothing to the calibrated model's own error (the IK is exact).
+  CHECK(r.compensated_position_mm.rms <= 1.1 * r.calibrated_model_position_mm.rms);
+  CHECK(r.compensated_orientation_deg.rms < r.nominal_orientation_deg.rms);
+  // The covariance's prediction is of the size of the true error.
+  CHECK(r.predicted_position_mm.rms > r.compensated_position_mm.rms / 3);
+  CHECK(r.predicted_position_mm.rms < r.compensated_position_mm.rms * 5);
+  const auto json = accuracyJson(r);
+  CHECK(json["compensated_commanded_position_error_mm"]["rms"].get<double>() ==
+        Approx(r.compensated_position_mm.rms));
+  const std::string svg = accuracySvg(r);
+  CHECK_THAT(svg, Contains("true error, compensated joints"));
+  CHECK_THAT(svg, Contains("x (mm)"));
+}
+
+TEST_CASE("a work volume out of the arm's reach is refused, not looped on") {
+  const Model nominal = puma560NominalModel();
+  const Compensator comp(nominal, nominal);
+  WorkVolume far;
+  far.box_min_mm = {3000, 3000, 3000};
+  far.box_max_mm = {3100, 3100, 3100};
+  far.poses = 5;
+  CHECK_THROWS_WITH(workVolumePoses(far, comp), Contains("reachable"));
+}
+
+TEST_CASE("the cell file's work_volume is read and checked, errors naming the key") {
+  const CellConfig c = parseCell(
+      R"({"work_volume": {"box_min_mm": [-100, -100, 200], "box_max_mm": [100, 100, 300],
+          "rz_range_deg": [-10, 10], "poses": 30, "seed": 4}})",
+      "c.json");
+  CHECK(c.work_volume.box_max_mm[2] == 300);
+  CHECK(c.work_volume.rz_range_deg[0] == -10);
+  CHECK(c.work_volume.ry_range_deg[0] == 120);  // default kept
+  CHECK(c.work_volume.poses == 30);
+  CHECK_THROWS_WITH(parseCell(R"({"work_volume": {"box_min_mm": [0, 0]}})", "c.json"),
+                    Contains("c.json: work_volume.box_min_mm: expected 3 numbers"));
+  CHECK_THROWS_WITH(parseCell(R"({"work_volume": {"box_min_mm": [0, 0, 500]}})", "c.json"),
+                    Contains("work_volume.box_max_mm[2]"));
+  CHECK_THROWS_WITH(parseCell(R"({"work_volume": {"poses": 0}})", "c.json"),
+                    Contains("work_volume.poses"));
+  CHECK_THROWS_WITH(parseCell(R"({"work_volume": {"size": 3}})", "c.json"),
+                    Contains("work_volume.size"));
+}
+
+TEST_CASE("targets files: both forms, and malformed rows named by file:line") {
+  const TargetFile poses = parseTargets(
+      "# a comment\nname,x_mm,y_mm,z_mm,rz_deg,ry_deg,rx_deg,config\n"
+      "p1, 10, 20, 300, 0, 135, 0,\np2,0,0,250,5,130,-5,right-up-noflip\n",
+      "t.csv");
+  REQUIRE(poses.targets.size() == 2);
+  CHECK_FALSE(poses.joints_form);
+  CHECK(poses.targets[0].name == "p1");
+  CHECK(poses.targets[0].line == 3);
+  CHECK(poses.targets[0].pose->translation().isApprox(Eigen::Vector3d(10, 20, 300)));
+  CHECK_FALSE(poses.targets[0].config);
+  CHECK(*poses.targets[1].config == ArmConfig{});
+  const TargetFile joints = parseTargets("j1,j2,j3,j4,j5,j6\n1,2,3,4,5,6\n", "j.csv");
+  CHECK(joints.joints_form);
+  CHECK_FALSE(joints.has_names);
+  CHECK((*joints.targets[0].nominal_joints)[5] == 6);
+
+  CHECK_THROWS_WITH(parseTargets("j1,j2,j3,j4,j5,j6\n1,2,x3,4,5,6\n", "j.csv"),
+                    Contains("j.csv:2: column 'j3': not a finite number: 'x3'"));
+  CHECK_THROWS_WITH(parseTargets("j1,j2,j3,j4,j5,j6\n1,2,3\n", "j.csv"),
+                    Contains("j.csv:2: expected 6 fields, got 3"));
+  CHECK_THROWS_WITH(parseTargets("j1,j2,j3,j4,j5\n", "j.csv"),
+                    Contains("j.csv:1: the header has no column 'j6'"));
+  CHECK_THROWS_WITH(parseTargets("x_mm,y_mm,z_mm,rz_deg,ry_deg,rx_deg,j1\n", "m.csv"),
+                    Contains("m.csv:1: the header has pose columns"));
+  CHECK_THROWS_WITH(parseTargets("x_mm,y_mm,z_mm,rz_deg,ry_deg,rx_deg,speed\n", "m.csv"),
+                    Contains("m.csv:1: unknown column 'speed'"));
+  CHECK_THROWS_WITH(parseTargets("x_mm,y_mm,z_mm,rz_deg,ry_deg,rx_deg,config\n1,2,3,4,5,6,up\n",
+                                 "m.csv"),
+                    Contains("m.csv:2: column 'config': unknown arm configuration 'up'"));
+  CHECK_THROWS_WITH(parseTargets("\n# nothing\n", "e.csv"), Contains("e.csv: empty"));
+}
+
+TEST_CASE("the output never commands a target that cannot be reached") {
+  const Model nominal = puma560NominalModel();
+  const Compensator comp(nominal, perturbed(4));
+  const TargetFile file = parseTargets(
+      "name,x_mm,y_mm,z_mm,rz_deg,ry_deg,rx_deg\nnear,0,0,250,0,135,0\nfar,3000,0,0,0,0,0\n",
+      "t.csv");
+  std::vector<CompensatedTarget> results;
+  for (const Target& t : file.targets) results.push_back(compensateTarget(comp, t));
+  REQUIRE(results[0].ok());
+  REQUIRE(results[1].status == CompensationStatus::kUnreachable);
+  const std::string csv = formatCompensated(file, results, OutputFormat::kCsv);
+  CHECK_THAT(csv, Contains("name,j1,j2,j3,j4,j5,j6,predicted_error_mm,status,config,note\n"));
+  CHECK_THAT(csv, Contains("\nfar,,,,,,,"));
+  CHECK_THAT(csv, Contains(",unreachable,"));
+  const std::string moves = formatCompensated(file, results, OutputFormat::kVal2Moves);
+  CHECK_THAT(moves, Contains("DO MOVE #PPOINT("));
+  CHECK_THAT(moves, Contains("; far: unreachable"));
+  CHECK(moves.find("DO MOVE") == moves.rfind("DO MOVE"));  // one move only
+  const std::string points = formatCompensated(file, results, OutputFormat::kVal2Points);
+  CHECK_THAT(points, Contains("\n#PPOINT("));
+}
+
+TEST_CASE("a calibrated model's covariance survives its file, and a bad one is refused") {
+  const Model nominal = puma560NominalModel();
+  Model m = calibrate(nominal, perturbed(9), 9);
+  REQUIRE(m.covariance);
+  const Model back = parseModel(formatModel(m), "m.json");
+  REQUIRE(back.covariance);
+  const double scale = m.covariance->cwiseAbs().maxCoeff();
+  CHECK((*back.covariance - *m.covariance).cwiseAbs().maxCoeff() < 1e-12 * scale);
+  // The predicted error is the same from the file as from the fit.
+  const JointsDeg q = programJoints(1, 1)[0];
+  CHECK(Compensator(nominal, back).predictedPositionError(q) ==
+        Approx(Compensator(nominal, m).predictedPositionError(q)).epsilon(1e-9));
+  // A refit's parameters do not inherit it.
+  CHECK_FALSE(withParams(m, toParams(m)).covariance);
+
+  auto json = modelToJson(m);
+  json["covariance"]["parameters"][3] = "J7.offset";
+  CHECK_THROWS_WITH(parseModel(json.dump(), "m.json"),
+                    Contains("covariance.parameters[3]: unknown parameter \"J7.offset\""));
+  json = modelToJson(m);
+  json["covariance"]["matrix"][1][0] = 1.0;
+  CHECK_THROWS_WITH(parseModel(json.dump(), "m.json"), Contains("not symmetric"));
+}
+
+TEST_CASE("error statistics: RMS, nearest-rank p95 and max") {
+  std::vector<double> v;
+  for (int i = 1; i <= 100; ++i) v.push_back(i);
+  const ErrorStats s = errorStats(v);
+  CHECK(s.count == 100);
+  CHECK(s.p95 == 95);
+  CHECK(s.max == 100);
+  CHECK(s.rms == Approx(std::sqrt(338350.0 / 100)));
+  CHECK(errorStats({}).count == 0);
+}
