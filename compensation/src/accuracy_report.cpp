@@ -1,5 +1,7 @@
 #include <robocal/compensation/accuracy_report.hpp>
 
+#include <robocal/formats/error.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -211,6 +213,18 @@ std::string accuracySvg(const AccuracyReport& r) {
   }
   svg += "</svg>\n";
   return svg;
+}
+
+AccuracyReport predictedWorkVolumeAccuracy(const Compensator& compensator, const WorkVolume& work,
+                                           const std::string& poses_from) {
+  AccuracyReport report = assessAccuracy(compensator, workVolumePoses(work, compensator));
+  report.poses_from = poses_from;
+  return report;
+}
+
+void writeWorkVolumeReport(const std::string& dir, const AccuracyReport& report) {
+  writeTextFileAtomic(dir + "/work_volume.json", accuracyJson(report, true).dump(2) + "\n");
+  writeTextFileAtomic(dir + "/work_volume.svg", accuracySvg(report));
 }
 
 }  // namespace robocal

@@ -1,5 +1,6 @@
 #include "fit_job.hpp"
 
+#include <robocal/compensation/accuracy_report.hpp>
 #include <robocal/formats/model_json.hpp>
 #include <robocal/formats/report.hpp>
 #include <robocal/formats/samples_csv.hpp>
@@ -71,6 +72,27 @@ void FitJob::launch(RunDir dir, std::vector<Sample> samples, double set_extensio
           saveModelFile(model_file, calibrated);
           writeReport(dir.file("report-" + name), fit, calibrated);
           json result = fitSummaryJson(fit);
+          proto::ModelEntry entry;
+          try {  // where the user works; a fit is still a fit without it
+            const AccuracyReport work = predictedWorkVolumeAccuracy(
+                Compensator(nominal_, calibrated), work_volume_, "the cell's work_volume");
+            writeWorkVolumeReport(dir.file("report-" + name), work);
+            result["work_volume"] = accuracyJson(work);
+            entry.work_volume_error_mm = work.predicted_position_mm.rms;
+          } catch (const std::exception& e) {
+            spdlog::warn("set {}: no work-volume accuracy: {}", set_index, e.what());
+            result["work_volume"] = {{"error", e.what()}};
+          }
+          entry.date_utc = calibrated.provenance ? calibrated.provenance->date_utc : "";
+          entry.run = dir.id();
+          entry.set = set_index;
+          entry.samples = static_cast<int>(fit.samples.size());
+          entry.fit_rms_mm = fit.fit.after.rms_mm;
+          entry.rank = fit.fit.identifiability.rank;
+          entry.usable = fit.problems.empty();
+          entry.problems = fit.problems;
+          const int version = models_.add(calibrated, entry);
+          result["model_version"] = version;
           result["run"] = dir.id();
           result["set"] = set_index;
           result["extension_mm"] = set_extension_mm;
@@ -84,6 +106,7 @@ void FitJob::launch(RunDir dir, std::vector<Sample> samples, double set_extensio
           dir.writeJson("result-" + name + ".json", result);
           dir.logEvent({{"event", "result"},
                         {"set", set_index},
+                        {"model_version", version},
                         {"rms_mm", fit.fit.after.rms_mm},
                         {"problems", fit.problems}});
           for (const std::string& problem : fit.problems)

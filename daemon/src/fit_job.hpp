@@ -1,14 +1,18 @@
 // The fit of a completed shell set, on a worker thread of its own: robocal solve's assessment of
 // the run's samples file, the calibrated model and the report written into the run folder, and a
-// RESULT published (and kept for `result`). At most one fit runs; the next waits for it.
+// RESULT published (and kept for `result`), with the predicted error over the cell's work volume;
+// the calibrated model is stored as a new version (ModelStore) for `activate`. At most one fit
+// runs; the next waits for it.
 #pragma once
 
 #include "run_shared.hpp"
 
+#include <robocal/daemon/model_store.hpp>
 #include <robocal/daemon/run.hpp>
 #include <robocal/daemon/run_store.hpp>
 #include <robocal/kinematics/model.hpp>
 #include <robocal/kinematics/sample.hpp>
+#include <robocal/planner/cell.hpp>
 
 #include <future>
 #include <vector>
@@ -17,8 +21,13 @@ namespace robocal::daemon {
 
 class FitJob {
  public:
-  FitJob(const Model& nominal, RunShared& shared, RunController::Publish publish)
-      : nominal_(nominal), shared_(shared), publish_(std::move(publish)) {}
+  FitJob(const Model& nominal, const WorkVolume& work_volume, ModelStore& models,
+         RunShared& shared, RunController::Publish publish)
+      : nominal_(nominal),
+        work_volume_(work_volume),
+        models_(models),
+        shared_(shared),
+        publish_(std::move(publish)) {}
   ~FitJob() { wait(); }
   FitJob(const FitJob&) = delete;
   FitJob& operator=(const FitJob&) = delete;
@@ -33,6 +42,8 @@ class FitJob {
 
  private:
   const Model& nominal_;
+  const WorkVolume work_volume_;
+  ModelStore& models_;
   RunShared& shared_;
   const RunController::Publish publish_;
   std::future<void> running_;

@@ -1,5 +1,7 @@
 // robocald: the robot-cell daemon. One Boost.Asio event loop serves the clients (JSON lines over
 // TCP); the run thread owns the serial drivers; planning and fits run on worker threads.
+#include "compensate_request.hpp"
+
 #include <robocal/build_info.hpp>
 #include <robocal/daemon/client_hub.hpp>
 #include <robocal/daemon/config.hpp>
@@ -174,6 +176,17 @@ class Daemon {
         reply(a.error, a.message);
         break;
       }
+      case proto::Cmd::kModels:
+        hub_.send(id, proto::toJson(run_.models().list()));
+        break;
+      case proto::Cmd::kActivate:
+        reply(run_.models().activate(req.model_version),
+              "model version " + std::to_string(req.model_version) +
+                  " is active: compensate uses it");
+        break;
+      case proto::Cmd::kCompensate:
+        hub_.send(id, compensateRequest(run_.models(), nominal_, req));
+        break;
     }
   }
 

@@ -31,6 +31,7 @@ struct RunController::Impl {
   Model nominal;
   std::optional<CellConfig> cell;
   RunStore store;
+  ModelStore models;
   RunShared shared;
   std::unique_ptr<CellIo> cell_io;
   RunContext ctx;
@@ -43,9 +44,10 @@ struct RunController::Impl {
         nominal(std::move(m)),
         cell(std::move(cell_config)),
         store(config.data_dir),
+        models(config.data_dir),
         cell_io(io ? std::move(io) : makeDriverCell(config)),
         ctx(config, nominal, cell, publish, store, shared, *cell_io),
-        fits(nominal, shared, publish) {
+        fits(nominal, cell ? cell->work_volume : WorkVolume{}, models, shared, publish) {
     recoverFromDisk();
     ctx.connectDevices();  // the ports' state is in the log from the start
     thread = std::thread([this] { threadMain(); });
@@ -369,6 +371,10 @@ nlohmann::json RunController::result() const {
           proto::Result{false, "no fit yet", {}, 0, 0, {}, {}, {}, json::object()});
     return d.last_result;
   });
+}
+
+ModelStore& RunController::models() {
+  return impl_->models;
 }
 
 nlohmann::json RunController::runs() const {

@@ -493,4 +493,117 @@ Status parseObject<Status>(const json& j) {
   return s;
 }
 
+namespace {
+json sixOrNull(const std::optional<std::array<double, 6>>& v) {
+  return v ? json(*v) : json(nullptr);
+}
+std::optional<std::array<double, 6>> readSix(const Reader& r, const json& j, const std::string& key) {
+  const auto it = j.find(key);
+  if (it == j.end() || it->is_null()) return std::nullopt;
+  if (!it->is_array() || it->size() != 6) r.fail(key, "must be an array of 6 numbers");
+  std::array<double, 6> out{};
+  for (std::size_t k = 0; k < 6; ++k) {
+    if (!(*it)[k].is_number()) r.fail(key, "must hold numbers");
+    out[k] = (*it)[k].get<double>();
+  }
+  return out;
+}
+std::vector<std::string> readStrings(const Reader& r, const json& list, const std::string& key) {
+  std::vector<std::string> out;
+  for (const json& v : list) {
+    if (!v.is_string()) r.fail(key, "must hold strings");
+    out.push_back(v.get<std::string>());
+  }
+  return out;
+}
+}  // namespace
+
+json toJson(const Models& o) {
+  json list = json::array();
+  for (const ModelEntry& m : o.models) {
+    json checks = json::array();
+    for (const HealthCheckEntry& c : m.checks)
+      checks.push_back({{"run", c.run},
+                        {"date_utc", c.date_utc},
+                        {"verdict", c.verdict},
+                        {"rms_mm", c.rms_mm}});
+    json e = {{"version", m.version},   {"file", m.file},         {"date_utc", m.date_utc},
+              {"run", m.run},           {"set", m.set},           {"samples", m.samples},
+              {"fit_rms_mm", m.fit_rms_mm}, {"rank", m.rank},     {"usable", m.usable},
+              {"problems", m.problems}, {"checks", checks},       {"active", m.active}};
+    e["work_volume_error_mm"] = m.work_volume_error_mm ? json(*m.work_volume_error_mm) : json();
+    list.push_back(e);
+  }
+  return {{"class", Models::kClass},
+          {"active", o.active ? json(*o.active) : json(nullptr)},
+          {"models", list}};
+}
+template <>
+Models parseObject<Models>(const json& j) {
+  const Reader r = open(j, Models::kClass);
+  Models out;
+  out.active = r.optInt("active");
+  const json& list = r.array("models");
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    if (!list[i].is_object())
+      r.fail("models[" + std::to_string(i) + "]", std::string("must be an object"));
+    const Reader e = r.element(list[i], "models", i);
+    ModelEntry m;
+    m.version = e.integer("version");
+    m.file = e.string("file");
+    m.date_utc = e.string("date_utc");
+    m.run = e.string("run");
+    m.set = e.integer("set");
+    m.samples = e.integer("samples");
+    m.fit_rms_mm = e.number("fit_rms_mm");
+    m.rank = e.integer("rank");
+    m.usable = e.boolean("usable");
+    m.problems = readStrings(e, e.array("problems"), "problems");
+    m.work_volume_error_mm = e.optNumber("work_volume_error_mm");
+    const json& checks = e.array("checks");
+    for (std::size_t k = 0; k < checks.size(); ++k) {
+      const Reader c = e.element(checks[k], "checks", k);
+      m.checks.push_back({c.string("run"), c.string("date_utc"), c.string("verdict"),
+                          c.number("rms_mm")});
+    }
+    m.active = e.boolean("active");
+    out.models.push_back(std::move(m));
+  }
+  return out;
+}
+
+json toJson(const Compensated& o) {
+  json rows = json::array();
+  for (const CompensatedRow& t : o.targets)
+    rows.push_back({{"name", t.name},
+                    {"status", t.status},
+                    {"config", t.config},
+                    {"note", t.note},
+                    {"joints_deg", sixOrNull(t.joints_deg)},
+                    {"predicted_error_mm",
+                     t.predicted_error_mm ? json(*t.predicted_error_mm) : json(nullptr)}});
+  return {{"class", Compensated::kClass}, {"model", o.model}, {"targets", rows}};
+}
+template <>
+Compensated parseObject<Compensated>(const json& j) {
+  const Reader r = open(j, Compensated::kClass);
+  Compensated out;
+  out.model = r.integer("model");
+  const json& rows = r.array("targets");
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    if (!rows[i].is_object())
+      r.fail("targets[" + std::to_string(i) + "]", std::string("must be an object"));
+    const Reader e = r.element(rows[i], "targets", i);
+    CompensatedRow t;
+    t.name = e.string("name");
+    t.status = e.string("status");
+    t.config = e.string("config");
+    t.note = e.string("note");
+    t.joints_deg = readSix(e, rows[i], "joints_deg");
+    t.predicted_error_mm = e.optNumber("predicted_error_mm");
+    out.targets.push_back(std::move(t));
+  }
+  return out;
+}
+
 }  // namespace robocal::proto

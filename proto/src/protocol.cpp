@@ -12,7 +12,7 @@
 namespace robocal::proto {
 namespace {
 
-constexpr std::array<std::pair<Cmd, const char*>, 11> kCmds = {{{Cmd::kStatus, "status"},
+constexpr std::array<std::pair<Cmd, const char*>, 14> kCmds = {{{Cmd::kStatus, "status"},
                                                                 {Cmd::kNudge, "nudge"},
                                                                 {Cmd::kWatch, "watch"},
                                                                 {Cmd::kPlan, "plan"},
@@ -22,7 +22,10 @@ constexpr std::array<std::pair<Cmd, const char*>, 11> kCmds = {{{Cmd::kStatus, "
                                                                 {Cmd::kResume, "resume"},
                                                                 {Cmd::kAbort, "abort"},
                                                                 {Cmd::kResult, "result"},
-                                                                {Cmd::kRuns, "runs"}}};
+                                                                {Cmd::kRuns, "runs"},
+                                                                {Cmd::kModels, "models"},
+                                                                {Cmd::kActivate, "activate"},
+                                                                {Cmd::kCompensate, "compensate"}}};
 
 using json = nlohmann::json;
 
@@ -45,6 +48,52 @@ std::string stringField(const json& obj, const char* key, const std::string& cmd
   return v ? v->get<std::string>() : std::string();
 }
 
+// Six finite numbers at `where` (a key path for the message); nullopt when absent or null.
+std::optional<std::array<double, 6>> sixNumbers(const json& obj, const char* key,
+                                                const std::string& where, const std::string& cmd) {
+  const auto it = obj.find(key);
+  if (it == obj.end() || it->is_null()) return std::nullopt;
+  if (!it->is_array() || it->size() != 6)
+    throw RequestError(where + " must be an array of 6 numbers", cmd);
+  std::array<double, 6> out{};
+  for (std::size_t k = 0; k < 6; ++k) {
+    if (!(*it)[k].is_number() || !std::isfinite((*it)[k].get<double>()))
+      throw RequestError(where + "[" + std::to_string(k) + "] must be a finite number", cmd);
+    out[k] = (*it)[k].get<double>();
+  }
+  return out;
+}
+
+std::vector<CompensateTarget> compensateTargets(const json& obj, const std::string& cmd) {
+  const auto it = obj.find("targets");
+  if (it == obj.end() || !it->is_array() || it->empty())
+    throw RequestError(
+        "compensate needs \"targets\": an array of {\"pose_mm_deg\": [x, y, z, rz, ry, rx]} or "
+        "{\"joints_deg\": [j1, ..., j6]}, each with an optional \"name\"",
+        cmd);
+  if (it->size() > kMaxCompensateTargets)
+    throw RequestError("compensate takes at most " + std::to_string(kMaxCompensateTargets) +
+                           " targets a request, got " + std::to_string(it->size()),
+                       cmd);
+  std::vector<CompensateTarget> out;
+  for (std::size_t i = 0; i < it->size(); ++i) {
+    const json& t = (*it)[i];
+    const std::string where = "targets[" + std::to_string(i) + "]";
+    if (!t.is_object()) throw RequestError(where + " must be an object", cmd);
+    CompensateTarget target;
+    if (t.contains("name")) {
+      if (!t["name"].is_string()) throw RequestError(where + ".name must be a string", cmd);
+      target.name = t["name"].get<std::string>();
+    }
+    target.pose_mm_deg = sixNumbers(t, "pose_mm_deg", where + ".pose_mm_deg", cmd);
+    target.joints_deg = sixNumbers(t, "joints_deg", where + ".joints_deg", cmd);
+    if (target.pose_mm_deg.has_value() == target.joints_deg.has_value())
+      throw RequestError(where + " needs one of \"pose_mm_deg\" and \"joints_deg\"", cmd);
+    out.push_back(std::move(target));
+  }
+  return out;
+}
+
 }  // namespace
 
 const char* cmdName(Cmd cmd) {
@@ -57,6 +106,8 @@ bool needsToken(Cmd cmd) {
     case Cmd::kWatch:
     case Cmd::kResult:
     case Cmd::kRuns:
+    case Cmd::kModels:
+    case Cmd::kCompensate:  // computes joints; moves nothing
       return false;
     default:
       return true;
@@ -82,7 +133,7 @@ Request parseRequest(std::string_view line) {
   if (!cmd)
     throw RequestError("unknown cmd \"" + name +
                            "\" (status, watch, plan, start, confirm, nudge, pause, resume, abort, "
-                           "result, runs)",
+                           "result, runs, models, activate, compensate)",
                        name);
   req.token = stringField(obj, "token", name);
   switch (req.cmd) {
@@ -123,6 +174,16 @@ Request parseRequest(std::string_view line) {
     case Cmd::kPause:
     case Cmd::kAbort:
       req.reason = stringField(obj, "reason", name);
+      break;
+    case Cmd::kActivate: {
+      const json* v = field(obj, "version", json::value_t::number_integer, "a whole number", name);
+      if (!v) throw RequestError("activate needs \"version\": the model's number (models)", name);
+      req.model_version = v->get<int>();
+      break;
+    }
+    case Cmd::kCompensate:
+      req.targets = compensateTargets(obj, name);
+      req.tool_mm_deg = sixNumbers(obj, "tool_mm_deg", "tool_mm_deg", name);
       break;
     default:
       break;

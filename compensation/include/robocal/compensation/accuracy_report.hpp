@@ -24,4 +24,13 @@ std::string accuracyText(const AccuracyReport& report);
 // compensated readings, one panel each, each with its own colour scale.
 std::string accuracySvg(const AccuracyReport& report);
 
+// The predicted error over the work volume of a fit (no truth), as `robocal solve` and robocald
+// add it to a fit's RESULT and report: the compensator's calibrated model over `work`.
+// Throws std::invalid_argument when the volume is out of reach (workVolumePoses).
+AccuracyReport predictedWorkVolumeAccuracy(const Compensator& compensator, const WorkVolume& work,
+                                           const std::string& poses_from);
+
+// Writes DIR/work_volume.json (accuracyJson with every pose) and DIR/work_volume.svg.
+void writeWorkVolumeReport(const std::string& dir, const AccuracyReport& report);
+
 }  // namespace robocal

@@ -8,6 +8,7 @@
 
 #include <robocal/daemon/cell_io.hpp>
 #include <robocal/daemon/config.hpp>
+#include <robocal/daemon/model_store.hpp>
 #include <robocal/daemon/run_store.hpp>
 #include <robocal/kinematics/model.hpp>
 #include <robocal/planner/plan.hpp>
@@ -52,6 +53,8 @@ class RunController {
   proto::Status status() const;
   nlohmann::json result() const;  // the latest RESULT object (or an empty one)
   nlohmann::json runs() const;    // a RUNS object
+  // The calibrated models the fits have stored (thread-safe; docs/robocald.md, "Models").
+  ModelStore& models();
 
  private:
   struct Impl;

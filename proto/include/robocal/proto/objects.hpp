@@ -18,6 +18,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <stdexcept>
@@ -200,6 +201,57 @@ struct Runs {
   bool operator==(const Runs&) const = default;
 };
 
+// MODELS: the calibrated models the daemon keeps (docs/protocol.md, "Models"), oldest first.
+// Each is an immutable file; `active` is the version compensate uses (null: none activated).
+struct HealthCheckEntry {
+  std::string run;
+  std::string date_utc;
+  std::string verdict;  // pass, warn, fail
+  double rms_mm = 0;    // bar residual RMS the model predicted at the check's samples
+  bool operator==(const HealthCheckEntry&) const = default;
+};
+struct ModelEntry {
+  int version = 0;
+  std::string file;
+  std::string date_utc;
+  std::string run;
+  int set = 0;
+  int samples = 0;
+  double fit_rms_mm = 0;
+  int rank = 0;
+  bool usable = true;                 // no problems: it may be activated
+  std::vector<std::string> problems;  // why not, when not
+  // Predicted 1-sigma tool position error over the cell's work volume (RMS), when known.
+  std::optional<double> work_volume_error_mm;
+  std::vector<HealthCheckEntry> checks;
+  bool active = false;
+  bool operator==(const ModelEntry&) const = default;
+};
+struct Models {
+  static constexpr const char* kClass = "MODELS";
+  std::optional<int> active;  // always sent; null when none is active
+  std::vector<ModelEntry> models;
+  bool operator==(const Models&) const = default;
+};
+
+// COMPENSATED: the answer to compensate, one row per target in the request's order, the fields of
+// `robocal compensate`'s CSV (docs/compensation.md); joints only when the status allows them.
+struct CompensatedRow {
+  std::string name;
+  std::string status;  // ok, unreachable, near_singularity, outside_limits
+  std::string config;
+  std::string note;
+  std::optional<std::array<double, 6>> joints_deg;
+  std::optional<double> predicted_error_mm;
+  bool operator==(const CompensatedRow&) const = default;
+};
+struct Compensated {
+  static constexpr const char* kClass = "COMPENSATED";
+  int model = 0;  // the active model's version
+  std::vector<CompensatedRow> targets;
+  bool operator==(const Compensated&) const = default;
+};
+
 // STATUS: every field is always present. `devices` has val_error / bar_error while that device is
 // not connected; `bar`, `prompt` and `plan` are null when there is none.
 struct Devices {
@@ -259,6 +311,8 @@ nlohmann::json toJson(const Plan& o);
 nlohmann::json toJson(const Result& o);
 nlohmann::json toJson(const Runs& o);
 nlohmann::json toJson(const Status& o);
+nlohmann::json toJson(const Models& o);
+nlohmann::json toJson(const Compensated& o);
 
 // The object as a T; ObjectError naming the class and field when it is not one.
 template <class T>
@@ -292,5 +346,9 @@ template <>
 Runs parseObject<Runs>(const nlohmann::json& object);
 template <>
 Status parseObject<Status>(const nlohmann::json& object);
+template <>
+Models parseObject<Models>(const nlohmann::json& object);
+template <>
+Compensated parseObject<Compensated>(const nlohmann::json& object);
 
 }  // namespace robocal::proto

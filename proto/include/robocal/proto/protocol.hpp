@@ -6,7 +6,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include <array>
 #include <optional>
+#include <vector>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -28,7 +30,10 @@ enum class Cmd {
   kResume,
   kAbort,
   kResult,
-  kRuns
+  kRuns,
+  kModels,
+  kActivate,
+  kCompensate
 };
 const char* cmdName(Cmd cmd);
 
@@ -43,6 +48,16 @@ class RequestError : public std::runtime_error {
   std::string cmd_;
 };
 
+// One target of a compensate request: a desired tool pose [x_mm, y_mm, z_mm, rz_deg, ry_deg,
+// rx_deg] in the chuck fixture's frame, or a program's nominal joint readings (deg).
+struct CompensateTarget {
+  std::string name;
+  std::optional<std::array<double, 6>> pose_mm_deg;
+  std::optional<std::array<double, 6>> joints_deg;
+  bool operator==(const CompensateTarget&) const = default;
+};
+inline constexpr std::size_t kMaxCompensateTargets = 1000;
+
 struct Request {
   Cmd cmd = Cmd::kStatus;
   std::string token;  // "" when not given
@@ -54,6 +69,9 @@ struct Request {
   double nudge_mm = 0;       // nudge: move the ball this far along the bar (+: away from the chuck)
   std::string run_id;        // resume: an interrupted run to continue (default: the latest)
   std::string reason;        // pause / abort: the operator's words, for the log
+  int model_version = 0;     // activate: the model to make active
+  std::vector<CompensateTarget> targets;            // compensate
+  std::optional<std::array<double, 6>> tool_mm_deg;  // compensate: TCP in the ball fixture frame
 };
 
 // Parses one line (without its newline). RequestError on malformed JSON, a non-object, a missing
