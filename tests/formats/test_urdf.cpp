@@ -224,8 +224,8 @@ TEST_CASE("origins at rpy's gimbal lock (pitch +-90 deg) export exactly") {
       m.links[k].rz_deg = angle(rng);
       m.links[k].rx_deg = angle(rng);
     }
-    // The PUMA's 90 deg twists (Rx(+-90) of L1, L3, L4, L5) with offsets of +-90 deg: Rx * Rz
-    // with pitch +-90.
+    // The PUMA's 90 deg twists (Rx(+-90) of L1, L4 and L5; L3 is turned above) followed by
+    // offsets of +-90 deg: Rx * Rz has pitch +-90.
     for (const int j : {1, 4, 5}) {
       m.links[j].rz_deg = m.links[j].ry_deg = 0.0;
       m.joints[j].offset_deg = trial % 3 ? 90.0 : -90.0;

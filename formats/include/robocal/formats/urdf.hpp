@@ -28,6 +28,7 @@
 
 #include <robocal/kinematics/model.hpp>
 
+#include <array>
 #include <string>
 
 namespace robocal {
