@@ -1,0 +1,89 @@
+// robocal export: a model in another format for other tools. So far one: URDF
+// (formats/include/robocal/formats/urdf.hpp, docs/export.md).
+#include "args.hpp"
+
+#include <robocal/formats/model_json.hpp>
+#include <robocal/formats/urdf.hpp>
+
+#include <charconv>
+#include <cstdio>
+#include <filesystem>
+
+namespace robocal::cli {
+namespace {
+
+constexpr const char* kHelp =
+    R"(usage: robocal export --urdf --model MODEL --out FILE [--name ROBOT]
+
+Writes the model as a URDF file for tools that read URDF (ROS, visualizers, planners): six
+revolute joints about their z axes, from the link chuck_fixture (the model's global frame, the
+chuck fixture's) to ball_fixture (the frame of the tool balls), with fixed links for the three
+balls and the three chucks. Joint k's origin holds the link transform before it and its zero
+offset; meters and radians. The URDF joint value is the controller's reading (radians) times
+the joint's gain: URDF cannot hold a gain, so the gains are stated in a comment at the top of
+the file and printed here. With gains of 1 the joint value is the reading. The exact path stays
+`robocal compensate` with the model file (docs/compensation.md). docs/export.md has the frames
+and how the export is tested.
+
+  --urdf                  write URDF (the only format so far)                     required
+  --model FILE            model to export (model format)                          required
+  --out FILE              URDF file to write (replaced whole, never half-written) required
+  --name ROBOT            the robot's name in the URDF       [from the model's name]
+
+exit status: 0 written, 1 an unreadable model or an unwritable file, 2 a usage error
+)";
+
+// A gain as the file's comment states it: the fewest digits that read back as the same double.
+std::string shortest(double value) {
+  char text[32];
+  return std::string(text, std::to_chars(text, text + sizeof text, value).ptr);
+}
+
+int run(const std::vector<std::string>& argv) {
+  const Args args(argv, {"model", "out", "name"}, {"urdf", "help"});
+  if (args.flag("help")) {
+    std::fputs(kHelp, stdout);
+    return 0;
+  }
+  if (!args.flag("urdf")) throw UsageError("say which format to write: --urdf");
+  if (!args.positional().empty())
+    throw UsageError("unexpected argument '" + args.positional().front() + "'");
+  const std::string model_path = args.required("model");
+  const std::string out = args.required("out");
+  if (args.has("name") && args.get("name", "").empty())
+    throw UsageError("--name must not be empty");
+  std::error_code ec;
+  if (std::filesystem::equivalent(out, model_path, ec))
+    throw UsageError("--out " + out + " is the model file itself");
+
+  const Model model = loadModelFile(model_path);
+  UrdfOptions options;
+  options.robot_name = args.get("name", urdfRobotName(model));
+  options.source = std::filesystem::absolute(model_path).lexically_normal().string();
+  writeTextFileAtomic(out, modelToUrdf(model, options));
+
+  const auto joints = urdfJointNames(model);
+  std::printf("wrote %s: robot \"%s\", revolute joints %s..%s from %s to %s\n", out.c_str(),
+              options.robot_name.c_str(), joints.front().c_str(), joints.back().c_str(),
+              kUrdfBaseLink, kUrdfBallFixtureLink);
+  std::printf("joint gains (URDF cannot hold them; also in the file's comment):");
+  bool unit_gains = true;
+  for (int j = 0; j < kJointCount; ++j) {
+    std::printf(" %s %s", joints[j].c_str(), shortest(model.joints[j].gain).c_str());
+    unit_gains = unit_gains && model.joints[j].gain == 1.0;
+  }
+  std::printf("\n");
+  if (unit_gains)
+    std::printf("every gain is 1: the URDF joint value is the controller's reading in radians\n");
+  else
+    std::printf(
+        "some gains are not 1: for exact forward kinematics the URDF joint value must be\n"
+        "reading * gain (radians), not the reading; robocal compensate with the model file stays "
+        "the exact path\n");
+  return 0;
+}
+
+const RegisterCommand registered({"export", "write a model as URDF for other tools", run});
+
+}  // namespace
+}  // namespace robocal::cli

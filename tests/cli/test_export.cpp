@@ -1,0 +1,77 @@
+#include <catch2/catch.hpp>
+
+#include "cli_helpers.hpp"
+
+#include <robocal/formats/model_json.hpp>
+#include <robocal/formats/urdf.hpp>
+
+#include <filesystem>
+
+using namespace robocal;
+using namespace robocal::test;
+using Catch::Matchers::Contains;
+
+TEST_CASE("robocal export --urdf writes the writer's URDF of the model and prints the gains") {
+  TempDir dir;
+  const auto r = runRobocal("export --urdf --model " + kModel + " --out " + (dir / "puma.urdf"));
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  const Model model = loadModelFile(kModel);
+  UrdfOptions options;
+  options.robot_name = urdfRobotName(model);
+  options.source = std::filesystem::path(kModel).lexically_normal().string();
+  CHECK(readTextFile(dir / "puma.urdf") == modelToUrdf(model, options));
+  CHECK_FALSE(std::filesystem::exists(dir / "puma.urdf.tmp"));
+  CHECK_THAT(r.output,
+             Contains("wrote " + (dir / "puma.urdf") +
+                      ": robot \"puma_560_nominal_lloyd_dh_robocal_reference_cell\", revolute "
+                      "joints J1..J6 from chuck_fixture to ball_fixture"));
+  CHECK_THAT(r.output, Contains("joint gains (URDF cannot hold them; also in the file's comment): "
+                                "J1 1 J2 1 J3 1 J4 1 J5 1 J6 1\n"));
+  CHECK_THAT(r.output, Contains("every gain is 1: the URDF joint value is the controller's reading "
+                                "in radians"));
+}
+
+TEST_CASE("robocal export --urdf of a model with gains other than 1 says what the joint value is") {
+  TempDir dir;
+  Model model = loadModelFile(kModel);
+  model.name = "calibrated";
+  model.joints[2].gain = 1.000728;
+  saveModelFile(dir / "cal.json", model);
+  const auto r = runRobocal("export --urdf --model " + (dir / "cal.json") + " --out " +
+                            (dir / "cal.urdf") + " --name puma");
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  CHECK_THAT(r.output, Contains("robot \"puma\""));
+  CHECK_THAT(r.output, Contains("J2 1 J3 1.000728 J4 1"));
+  CHECK_THAT(r.output, Contains("some gains are not 1: for exact forward kinematics the URDF "
+                                "joint value must be\nreading * gain (radians), not the reading"));
+  const std::string text = readTextFile(dir / "cal.urdf");
+  CHECK_THAT(text, Contains("<robot name=\"puma\">"));
+  CHECK_THAT(text, Contains("    J3 gain 1.000728   (not 1)\n"));
+}
+
+TEST_CASE("robocal export: usage errors and unreadable or unwritable files are named") {
+  TempDir dir;
+  auto r = runRobocal("export --model " + kModel + " --out " + (dir / "x.urdf"));
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.output, Contains("robocal export: say which format to write: --urdf"));
+  r = runRobocal("export --urdf --model " + kModel);
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.output, Contains("--out"));
+  r = runRobocal("export --urdf --model " + kModel + " --out " + (dir / "x.urdf") + " --name ''");
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.output, Contains("--name must not be empty"));
+  r = runRobocal("export --urdf --model " + (dir / "missing.json") + " --out " + (dir / "x.urdf"));
+  CHECK(r.exit_code == 1);
+  CHECK_THAT(r.output, Contains(dir / "missing.json") && Contains("cannot open"));
+  r = runRobocal("export --urdf --model " + kModel + " --out " + (dir / "no/such/dir/x.urdf"));
+  CHECK(r.exit_code == 1);
+  CHECK_THAT(r.output, Contains(dir / "no/such/dir/x.urdf.tmp") && Contains("cannot create"));
+  std::filesystem::copy_file(kModel, dir / "m.json");
+  r = runRobocal("export --urdf --model " + (dir / "m.json") + " --out " + (dir / "m.json"));
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.output, Contains("is the model file itself"));
+  CHECK(readTextFile(dir / "m.json") == readTextFile(kModel));
+  CHECK_FALSE(std::filesystem::exists(dir / "x.urdf"));
+}
