@@ -3,9 +3,11 @@
 // fit is usable as a calibration (or --allow-partial), with a report.
 #include "args.hpp"
 
+#include <robocal/compensation/accuracy_report.hpp>
 #include <robocal/formats/model_json.hpp>
 #include <robocal/formats/report.hpp>
 #include <robocal/formats/samples_csv.hpp>
+#include <robocal/planner/cell_json.hpp>
 #include <robocal/solver/assessment.hpp>
 
 #include <cstdio>
@@ -39,6 +41,8 @@ no model and exits with 3, unless --allow-partial is given.
   --drop-outliers         drop the reported outliers and refit (listed, never silent)
   --truth FILE            a simulation's true model: report the ball-position error
                           of the nominal and calibrated models against it
+  --cell FILE             judge the predicted accuracy over this cell file's work_volume
+                          (docs/compensation.md)              [the reference cell's]
   --max-iterations N      LM iteration cap                                         [100]
   --json                  one JSON object instead of text
 
@@ -141,7 +145,8 @@ void printText(const FitAssessment& a, const Model& calibrated, size_t files) {
 
 int run(const std::vector<std::string>& argv) {
   const Args args(
-      argv, {"model", "out", "validate", "report", "outlier-sigmas", "truth", "max-iterations"},
+      argv,
+      {"model", "out", "validate", "report", "outlier-sigmas", "truth", "max-iterations", "cell"},
       {"json", "drop-outliers", "allow-partial", "help"});
   if (args.flag("help")) {
     std::fputs(kHelp, stdout);
@@ -173,16 +178,33 @@ int run(const std::vector<std::string>& argv) {
   }
   if (args.has("truth")) options.truth = loadModelFile(args.get("truth", ""));
 
+  const CellConfig cell = args.has("cell") ? loadCellFile(args.get("cell", "")) : CellConfig{};
+
   const FitAssessment fit = assessFit(nominal, std::move(samples), options);
   const Model calibrated = calibratedModel(fit, origin);
   const bool refuse = !fit.problems.empty() && !args.flag("allow-partial");
   if (args.has("out") && !refuse) saveModelFile(args.get("out", ""), calibrated);
   if (args.has("report")) writeReport(args.get("report", ""), fit, calibrated);
+  // Where the user works: the predicted error over the work volume (robocald's RESULT has the
+  // same, from the same code).
+  nlohmann::ordered_json summary = fitSummaryJson(fit);
+  std::string work_text;
+  try {
+    const AccuracyReport work = predictedWorkVolumeAccuracy(
+        Compensator(nominal, calibrated), cell.work_volume, "the cell's work_volume");
+    summary["work_volume"] = accuracyJson(work);
+    work_text = accuracyText(work);
+    if (args.has("report")) writeWorkVolumeReport(args.get("report", ""), work);
+  } catch (const std::exception& e) {
+    summary["work_volume"] = {{"error", e.what()}};
+    work_text = std::string("work-volume accuracy: ") + e.what() + "\n";
+  }
 
   if (args.flag("json")) {
-    std::printf("%s\n", fitSummaryJson(fit).dump().c_str());
+    std::printf("%s\n", summary.dump().c_str());
   } else {
     printText(fit, calibrated, args.positional().size());
+    std::printf("\n%s", work_text.c_str());
     if (args.has("out") && !refuse) std::printf("wrote %s\n", args.get("out", "").c_str());
     if (args.has("report"))
       std::printf("report in %s (summary.html)\n", args.get("report", "").c_str());

@@ -7,7 +7,9 @@
 #include "daemon_process.hpp"
 #include "sim_cell.hpp"
 
+#include <robocal/compensation/compensate.hpp>
 #include <robocal/formats/model_json.hpp>
+#include <robocal/kinematics/kinematics.hpp>
 #include <robocal/formats/samples_csv.hpp>
 #include <robocal/planner/plan_json.hpp>
 #include <robocal/sim/operator.hpp>
@@ -63,7 +65,8 @@ TEST_CASE("a full run to RESULT recovers the true robot", "[e2e]") {
   REQUIRE(solved.exit_code == 0);
   json without_run_keys = result;
   for (const char* key :
-       {"run", "set", "extension_mm", "calibrated_file", "report_dir", "samples_file"})
+       {"run", "set", "extension_mm", "calibrated_file", "report_dir", "samples_file",
+        "model_version"})
     without_run_keys.erase(key);
   CHECK(json::parse(solved.output) == without_run_keys);
   CHECK(result["parameter_table"].size() == 54);
@@ -104,14 +107,68 @@ TEST_CASE("a full run to RESULT recovers the true robot", "[e2e]") {
   CHECK(calibrated_rms < 0.3 * nominal_rms);
   CHECK(calibrated_rms < 0.1);
 
-  // A restarted daemon serves the same fit from the run folder.
+  // The fit is kept as a model version; compensate uses it once activated (with the token).
+  CHECK(result["work_volume"]["predicted_position_error_mm"]["rms"].get<double>() > 0);
+  const int version = result["model_version"];
+  json models = c->request({{"cmd", "models"}}, 10, "MODELS");
+  REQUIRE(models["models"].size() == 1);
+  CHECK(models["active"].is_null());
+  CHECK(models["models"][0]["version"] == version);
+  CHECK(models["models"][0]["samples"] == result["n"]);
+  CHECK(models["models"][0]["usable"] == true);
+  // A program point in the work volume near the chucks (where the calibration measured): the
+  // nominal solution of a pose there.
+  const Model nominal_model = loadModelFile(kModel);
+  const JointsDeg program =
+      Compensator(nominal_model, nominal_model)
+          .forPose(poseFromXyzZyx(-50, 30, 260, 10, 130, -10))
+          .joints_deg;
+  const json pose_target = {{"name", "p1"}, {"pose_mm_deg", {0, 0, 250, 0, 135, 0}}};
+  const json joints_target = {
+      {"name", "j1"},
+      {"joints_deg", std::vector<double>(program.data(), program.data() + 6)}};
+  const json compensate = {{"cmd", "compensate"}, {"targets", {pose_target, joints_target}}};
+  CHECK_THAT(c->request(compensate, 10, "ERROR")["message"].get<std::string>(),
+             Contains("no model is active"));
+  CHECK(c->request({{"cmd", "activate"}, {"version", version}}, 10, "ERROR")["class"] == "ERROR");
+  CHECK(c->request({{"cmd", "activate"}, {"version", version + 5}, {"token", cell.daemon->token()}},
+                   10, "ERROR")["class"] == "ERROR");
+  CHECK(c->request({{"cmd", "activate"}, {"version", version}, {"token", cell.daemon->token()}},
+                   10, "ACK")["class"] == "ACK");
+  const json answer = c->request(compensate, 10, "COMPENSATED");
+  REQUIRE(answer["class"] == "COMPENSATED");
+  CHECK(answer["model"] == version);
+  REQUIRE(answer["targets"].size() == 2);
+  {
+    // The true robot at the corrected joints is much closer to the target than at the nominal.
+    const Model truth = loadModelFile(cell.truth_path);
+    const Kinematics true_kin(truth), nominal_kin(nominal_model);
+    REQUIRE(answer["targets"][1]["status"] == "ok");
+    JointsDeg corrected;
+    for (int j = 0; j < 6; ++j) corrected[j] = answer["targets"][1]["joints_deg"][j];
+    const Eigen::Vector3d meant = nominal_kin.toolPose(program).translation();
+    const double before = (true_kin.toolPose(program).translation() - meant).norm();
+    const double after = (true_kin.toolPose(corrected).translation() - meant).norm();
+    INFO("tool position error: program " << before << " mm, compensated " << after << " mm");
+    CHECK(after < 0.3 * before);
+    CHECK(answer["targets"][0]["status"] == "ok");
+    CHECK(answer["targets"][0]["predicted_error_mm"].get<double>() > 0);
+  }
+
+  // A restarted daemon serves the same fit from the run folder, and the same active model.
   c.reset();
   cell.daemon->stop();
   cell.daemon->start();
-  const json again = cell.daemon->client()->request({{"cmd", "result"}}, 10, "RESULT");
+  auto c2 = cell.daemon->client();
+  const json again = c2->request({{"cmd", "result"}}, 10, "RESULT");
   CHECK(again["run"] == result["run"]);
   CHECK(again["set"] == result["set"]);
   CHECK(again["rms_mm"] == result["rms_mm"]);
+  models = c2->request({{"cmd", "models"}}, 10, "MODELS");
+  CHECK(models["active"] == version);
+  CHECK(models["models"][0]["active"] == true);
+  CHECK(c2->request(compensate, 10, "COMPENSATED")["targets"][1]["joints_deg"] ==
+        answer["targets"][1]["joints_deg"]);
 }
 
 TEST_CASE("kill -9 at random moments: every planned point is measured exactly once", "[e2e]") {

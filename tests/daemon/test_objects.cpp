@@ -68,6 +68,28 @@ Result fullResult() {
            {"prediction", {{"n", 850}, {"rms_mm", 0.041}, {"max_abs_mm", 0.12}}}};
   return r;
 }
+Models fullModels() {
+  ModelEntry m;
+  m.version = 3;
+  m.file = "/var/lib/robocald/models/model-0003.json";
+  m.date_utc = "2026-12-02T08:00:00Z";
+  m.run = "2026-12-02T07-00-00";
+  m.set = 2;
+  m.samples = 1714;
+  m.fit_rms_mm = 0.082;
+  m.rank = 36;
+  m.usable = true;
+  m.problems = {"none really"};
+  m.work_volume_error_mm = 0.047;
+  m.checks = {{"2026-12-03T07-00-00", "2026-12-03T07:10:00Z", "pass", 0.09}};
+  m.active = true;
+  return {3, {m}};
+}
+Compensated fullCompensated() {
+  return {3,
+          {{"p1", "ok", "right-up-noflip", "", std::array<double, 6>{1, 2, 3, 4, 5, 6}, 0.05},
+           {"p2", "unreachable", "right-up-noflip", "out of reach", std::nullopt, std::nullopt}}};
+}
 Event connectionCheck() {
   return {"connection_check",
           {{"shell", 3},
@@ -91,6 +113,8 @@ std::map<std::string, json> fullObjects() {
           {"PLAN", toJson(fullPlan())},
           {"RESULT", toJson(fullResult())},
           {"RUNS", toJson(Runs{{{"2026-12-01T16-16-26", "done", ""}}})},
+          {"MODELS", toJson(fullModels())},
+          {"COMPENSATED", toJson(fullCompensated())},
           {"STATUS", toJson(fullStatus())}};
 }
 
@@ -131,6 +155,9 @@ json with(json j, const std::string& key, json value) {
 
 TEST_CASE("objects: every server class round-trips through its struct") {
   roundTrips(Version{"0.1.0"});
+  roundTrips(fullModels());
+  roundTrips(Models{std::nullopt, {}});
+  roundTrips(fullCompensated());
   roundTrips(Error{"no such run", std::nullopt, std::nullopt});
   roundTrips(Error{"2 safety violations", "start", {{"shell 3: joint 5 limit", "shell 4"}}});
   roundTrips(Ack{Cmd::kConfirm, std::nullopt});

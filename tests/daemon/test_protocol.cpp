@@ -31,6 +31,35 @@ TEST_CASE("bad requests say what is wrong") {
   CHECK_THROWS_WITH(parseRequest(R"({"cmd":"plan","plan":"a","cell":"b"})"), Contains("not both"));
 }
 
+TEST_CASE("models, activate and compensate requests are validated field by field") {
+  CHECK(parseRequest(R"({"cmd":"models"})").cmd == Cmd::kModels);
+  CHECK(parseRequest(R"({"cmd":"activate","version":4})").model_version == 4);
+  CHECK_THROWS_WITH(parseRequest(R"({"cmd":"activate"})"), Contains("activate needs \"version\""));
+  const Request r = parseRequest(
+      R"({"cmd":"compensate","targets":[{"name":"a","pose_mm_deg":[1,2,3,4,5,6]},)"
+      R"({"joints_deg":[0,10,20,30,40,50]}],"tool_mm_deg":[0,0,100,0,0,0]})");
+  REQUIRE(r.targets.size() == 2);
+  CHECK(r.targets[0].name == "a");
+  CHECK((*r.targets[0].pose_mm_deg)[2] == 3);
+  CHECK_FALSE(r.targets[0].joints_deg);
+  CHECK((*r.targets[1].joints_deg)[5] == 50);
+  CHECK((*r.tool_mm_deg)[2] == 100);
+  CHECK_THROWS_WITH(parseRequest(R"({"cmd":"compensate"})"), Contains("compensate needs"));
+  CHECK_THROWS_WITH(parseRequest(R"({"cmd":"compensate","targets":[{"pose_mm_deg":[1,2,3]}]})"),
+                    Contains("targets[0].pose_mm_deg must be an array of 6 numbers"));
+  CHECK_THROWS_WITH(
+      parseRequest(R"({"cmd":"compensate","targets":[{"joints_deg":[1,2,3,4,5,"x"]}]})"),
+      Contains("targets[0].joints_deg[5] must be a finite number"));
+  CHECK_THROWS_WITH(parseRequest(R"({"cmd":"compensate","targets":[{"name":"x"}]})"),
+                    Contains("targets[0] needs one of"));
+  std::string many = R"({"cmd":"compensate","targets":[)";
+  for (int i = 0; i <= 1000; ++i) many += std::string(i ? "," : "") + R"({"joints_deg":[0,0,0,0,0,0]})";
+  CHECK_THROWS_WITH(parseRequest(many + "]}"), Contains("at most 1000"));
+  CHECK(needsToken(Cmd::kActivate));
+  CHECK_FALSE(needsToken(Cmd::kModels));
+  CHECK_FALSE(needsToken(Cmd::kCompensate));
+}
+
 TEST_CASE("what needs the token") {
   CHECK_FALSE(needsToken(Cmd::kStatus));
   CHECK_FALSE(needsToken(Cmd::kWatch));
