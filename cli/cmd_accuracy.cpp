@@ -80,8 +80,8 @@ int run(const std::vector<std::string>& argv) {
   return 0;
 }
 
-const RegisterCommand registered(
-    {"accuracy", "accuracy over the work volume, nominal and compensated", run});
+const RegisterCommand registered({"accuracy",
+                                  "accuracy over the work volume, nominal and compensated", run});
 
 }  // namespace
 }  // namespace robocal::cli

@@ -103,8 +103,8 @@ int run(const std::vector<std::string>& argv) {
   return not_ok ? kExitSomeNotOk : 0;
 }
 
-const RegisterCommand registered(
-    {"compensate", "corrected joint targets from a calibrated model", run});
+const RegisterCommand registered({"compensate", "corrected joint targets from a calibrated model",
+                                  run});
 
 }  // namespace
 }  // namespace robocal::cli

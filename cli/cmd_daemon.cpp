@@ -78,6 +78,8 @@ int show(const json& reply, bool as_json) {
     std::fputs(resultText(proto::parseObject<proto::Result>(reply)).c_str(), stdout);
   } else if (cls == proto::Runs::kClass) {
     std::fputs(runsText(proto::parseObject<proto::Runs>(reply)).c_str(), stdout);
+  } else if (cls == proto::Models::kClass) {
+    std::fputs(modelsText(proto::parseObject<proto::Models>(reply)).c_str(), stdout);
   } else if (cls == proto::Plan::kClass) {
     std::fputs(planText(proto::parseObject<proto::Plan>(reply)).c_str(), stdout);
   } else {
@@ -130,6 +132,27 @@ int result(const std::vector<std::string>& argv) {
 }
 int runs(const std::vector<std::string>& argv) {
   return simple(argv, "runs", false, {}, {}, "usage: robocal runs [options]\n");
+}
+int models(const std::vector<std::string>& argv) {
+  return simple(argv, "models", false, {}, {},
+                "usage: robocal models [options]\n\nThe calibrated models robocald keeps (one "
+                "version per fit), the active one starred.\n");
+}
+int activate(const std::vector<std::string>& argv) {
+  return simple(
+      argv, "activate", true, {},
+      [](const Args& a, json& r) {
+        if (a.positional().size() != 1)
+          throw UsageError("give the model's version (robocal models)");
+        const std::string& v = a.positional()[0];
+        char* end = nullptr;
+        const long version = std::strtol(v.c_str(), &end, 10);
+        if (v.empty() || *end || version < 1 || version > 1000000000)
+          throw UsageError("the version must be a whole number (robocal models lists them)");
+        r["version"] = version;
+      },
+      "usage: robocal activate VERSION [options]\n\nMakes a stored model the active one: "
+      "robocald's compensate request uses it.\n");
 }
 int start(const std::vector<std::string>& argv) {
   return simple(
@@ -316,6 +339,8 @@ const RegisterCommand r6({"resume", "robocald: resume a paused or interrupted ru
 const RegisterCommand r7({"abort", "robocald: stop the robot and end the run", abortRun});
 const RegisterCommand r8({"result", "robocald: the latest fit", result});
 const RegisterCommand r9({"runs", "robocald: the run history", runs});
+const RegisterCommand r12({"models", "robocald: the stored calibrated models", models});
+const RegisterCommand r13({"activate", "robocald: make a stored model the active one", activate});
 
 }  // namespace
 }  // namespace robocal::cli

@@ -169,6 +169,29 @@ std::string runsText(const proto::Runs& r) {
   return out;
 }
 
+std::string modelsText(const proto::Models& m) {
+  if (m.models.empty()) return "no calibrated models yet (each fit of a run stores one)\n";
+  std::string out =
+      "version  date                  run                  set  samples  fit RMS   work-volume  "
+      "checks\n";
+  for (const proto::ModelEntry& e : m.models) {
+    char buf[256];
+    const std::string work =
+        e.work_volume_error_mm ? std::to_string(*e.work_volume_error_mm).substr(0, 6) + " mm" : "-";
+    const std::string last_check =
+        e.checks.empty() ? "none"
+                         : std::to_string(e.checks.size()) + ", last " + e.checks.back().verdict;
+    std::snprintf(buf, sizeof buf, "%s%6d  %-21s %-20s %3d  %7d  %.4f mm  %-11s  %s%s\n",
+                  e.active ? "*" : " ", e.version, e.date_utc.c_str(), e.run.c_str(), e.set,
+                  e.samples, e.fit_rms_mm, work.c_str(), last_check.c_str(),
+                  e.usable ? "" : "  (not usable)");
+    out += buf;
+  }
+  out += m.active ? "* active: version " + std::to_string(*m.active) + " (compensate uses it)\n"
+                  : "no model is active: robocal activate VERSION\n";
+  return out;
+}
+
 std::string planText(const proto::Plan& p) {
   std::ostringstream out;
   out << "plan (" << p.source << "): " << p.shells << " shells, " << p.points << " points, "

@@ -28,6 +28,8 @@ std::string progressLine(const proto::Progress& progress, std::optional<double> 
 std::string statusText(const proto::Status& status);
 std::string resultText(const proto::Result& result);
 std::string runsText(const proto::Runs& runs);
+// The MODELS list: one line a model, the active one starred.
+std::string modelsText(const proto::Models& models);
 std::string planText(const proto::Plan& plan);
 
 }  // namespace robocal::cli

@@ -18,13 +18,13 @@ std::vector<Eigen::Isometry3d> workVolumePoses(const WorkVolume& work,
   std::vector<Eigen::Isometry3d> poses;
   const long max_draws = 50L * work.poses;
   for (long draw = 0; draw < max_draws && static_cast<int>(poses.size()) < work.poses; ++draw) {
-    const Eigen::Isometry3d pose = poseFromXyzZyx(
-        uniform(work.box_min_mm[0], work.box_max_mm[0]),
-        uniform(work.box_min_mm[1], work.box_max_mm[1]),
-        uniform(work.box_min_mm[2], work.box_max_mm[2]),
-        uniform(work.rz_range_deg[0], work.rz_range_deg[1]),
-        uniform(work.ry_range_deg[0], work.ry_range_deg[1]),
-        uniform(work.rx_range_deg[0], work.rx_range_deg[1]));
+    const Eigen::Isometry3d pose =
+        poseFromXyzZyx(uniform(work.box_min_mm[0], work.box_max_mm[0]),
+                       uniform(work.box_min_mm[1], work.box_max_mm[1]),
+                       uniform(work.box_min_mm[2], work.box_max_mm[2]),
+                       uniform(work.rz_range_deg[0], work.rz_range_deg[1]),
+                       uniform(work.ry_range_deg[0], work.ry_range_deg[1]),
+                       uniform(work.rx_range_deg[0], work.rx_range_deg[1]));
     // Reachable by the nominal model: the controller could be commanded there at all.
     const CompensatedTarget t = compensator.forPose(pose);
     if (t.ok()) poses.push_back(pose);

@@ -81,13 +81,13 @@ ojson accuracyJson(const AccuracyReport& r, bool per_pose) {
     for (const PoseAccuracy& p : r.poses) {
       const CompensatedTarget& t = p.target;
       const LinkParams pose = linkFromTransform(t.target);
-      ojson one = {{"pose", {pose.x_mm, pose.y_mm, pose.z_mm, pose.rz_deg, pose.ry_deg,
-                             pose.rx_deg}},
-                   {"status", compensationStatusName(t.status)},
-                   {"config", armConfigName(t.config)},
-                   {"nominal_joints_deg", std::vector<double>(t.nominal_joints_deg.data(),
-                                                              t.nominal_joints_deg.data() + 6)},
-                   {"joints_deg", std::vector<double>(t.joints_deg.data(), t.joints_deg.data() + 6)}};
+      ojson one = {
+          {"pose", {pose.x_mm, pose.y_mm, pose.z_mm, pose.rz_deg, pose.ry_deg, pose.rx_deg}},
+          {"status", compensationStatusName(t.status)},
+          {"config", armConfigName(t.config)},
+          {"nominal_joints_deg",
+           std::vector<double>(t.nominal_joints_deg.data(), t.nominal_joints_deg.data() + 6)},
+          {"joints_deg", std::vector<double>(t.joints_deg.data(), t.joints_deg.data() + 6)}};
       if (!std::isnan(t.predicted_position_error_mm)) {
         one["predicted_position_error_mm"] = t.predicted_position_error_mm;
         one["predicted_orientation_error_deg"] = t.predicted_orientation_error_deg;
@@ -109,7 +109,8 @@ std::string accuracyText(const AccuracyReport& r) {
   out += r.ok < r.requested ? "; the others could not be compensated (status not ok)\n" : "\n";
   if (r.predicted_position_mm.count) {
     out += statsLine("predicted 1-sigma error, position:", r.predicted_position_mm, "mm", 4);
-    out += statsLine("predicted 1-sigma error, orientation:", r.predicted_orientation_deg, "deg", 5);
+    out +=
+        statsLine("predicted 1-sigma error, orientation:", r.predicted_orientation_deg, "deg", 5);
   } else {
     out += "  predicted error: the calibrated model has no covariance (fit it with this robocal)\n";
   }
@@ -122,8 +123,8 @@ std::string accuracyText(const AccuracyReport& r) {
                      "mm", 4);
     out += statsLine("commanded with nominal joints, orientation:", r.nominal_orientation_deg,
                      "deg", 5);
-    out += statsLine("commanded with compensated joints, orientation:",
-                     r.compensated_orientation_deg, "deg", 5);
+    out += statsLine(
+        "commanded with compensated joints, orientation:", r.compensated_orientation_deg, "deg", 5);
     if (r.compensated_position_mm.rms > 0)
       out += fmt("  compensation makes the RMS position error %.1fx smaller\n",
                  r.nominal_position_mm.rms / r.compensated_position_mm.rms);
@@ -158,14 +159,15 @@ std::string accuracySvg(const AccuracyReport& r) {
   const double plot = 300, left = 60, top = 50, gap = 150;
   const double scale = plot / std::max(x1 - x0, y1 - y0);
   const double width = left + panels.size() * (plot + gap), height = top + plot + 60;
-  std::string svg = fmt(
-      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" "
-      "font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%%\" height=\"100%%\" "
-      "fill=\"white\"/>\n",
-      std::max(width, 400.0), height);
-  svg += "<text x=\"10\" y=\"20\" font-size=\"14\">Tool position error over the work volume, "
-         "seen from above (" +
-         std::to_string(ok.size()) + " poses; world frame = chuck fixture)</text>\n";
+  std::string svg =
+      fmt("<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" "
+          "font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%%\" height=\"100%%\" "
+          "fill=\"white\"/>\n",
+          std::max(width, 400.0), height);
+  svg +=
+      "<text x=\"10\" y=\"20\" font-size=\"14\">Tool position error over the work volume, "
+      "seen from above (" +
+      std::to_string(ok.size()) + " poses; world frame = chuck fixture)</text>\n";
   for (size_t k = 0; k < panels.size(); ++k) {
     const double ox = left + k * (plot + gap);
     double vmax = 0;
@@ -174,9 +176,10 @@ std::string accuracySvg(const AccuracyReport& r) {
     const double cmax = std::max(cstep, std::ceil(vmax / cstep) * cstep);
     svg += fmt("<text x=\"%.0f\" y=\"%.0f\" font-size=\"13\">", ox, top - 10) + panels[k].title +
            "</text>\n";
-    svg += fmt("<rect x=\"%.0f\" y=\"%.0f\" width=\"%.0f\" height=\"%.0f\" fill=\"none\" "
-               "stroke=\"#888\"/>\n",
-               ox, top, plot, plot);
+    svg +=
+        fmt("<rect x=\"%.0f\" y=\"%.0f\" width=\"%.0f\" height=\"%.0f\" fill=\"none\" "
+            "stroke=\"#888\"/>\n",
+            ox, top, plot, plot);
     for (double v = x0; v <= x1 + 1e-9; v += axis_step) {
       const double px = ox + (v - x0) * scale;
       svg += fmt("<line x1=\"%.1f\" y1=\"%.0f\" x2=\"%.1f\" y2=\"%.0f\" stroke=\"#eee\"/>\n", px,
@@ -190,8 +193,8 @@ std::string accuracySvg(const AccuracyReport& r) {
                  py, ox + plot, py);
       svg += fmt("<text x=\"%.0f\" y=\"%.1f\" text-anchor=\"end\">%g</text>\n", ox - 5, py + 4, v);
     }
-    svg += fmt("<text x=\"%.0f\" y=\"%.0f\" text-anchor=\"middle\">x (mm)</text>\n",
-               ox + plot / 2, top + plot + 32);
+    svg += fmt("<text x=\"%.0f\" y=\"%.0f\" text-anchor=\"middle\">x (mm)</text>\n", ox + plot / 2,
+               top + plot + 32);
     svg += fmt("<text x=\"%.0f\" y=\"%.0f\" text-anchor=\"middle\" ", ox - 42, top + plot / 2) +
            fmt("transform=\"rotate(-90 %.0f %.0f)\">y (mm)</text>\n", ox - 42, top + plot / 2);
     for (const PoseAccuracy* p : ok) {
@@ -207,8 +210,8 @@ std::string accuracySvg(const AccuracyReport& r) {
                  top + plot - (i + 1) * plot / 50, plot / 50 + 0.5) +
              "fill=\"" + colour((i + 0.5) / 50) + "\"/>\n";
     for (double v = 0; v <= cmax + 1e-12; v += cstep)
-      svg += fmt("<text x=\"%.0f\" y=\"%.1f\">%g</text>\n", bx + 18, top + plot - v / cmax * plot + 4,
-                 v);
+      svg += fmt("<text x=\"%.0f\" y=\"%.1f\">%g</text>\n", bx + 18,
+                 top + plot - v / cmax * plot + 4, v);
     svg += fmt("<text x=\"%.0f\" y=\"%.0f\">mm</text>\n", bx, top + plot + 15);
   }
   svg += "</svg>\n";

@@ -34,8 +34,9 @@ Header readHeader(const std::vector<std::string_view>& fields, bool& joints_form
   for (const char* c : kPoseColumns) pose_found += columnOf(fields, c) >= 0;
   for (const char* c : kJointColumns) joint_found += columnOf(fields, c) >= 0;
   if (pose_found && joint_found)
-    throw FormatError(where + "the header has pose columns (x_mm ...) and joint columns (j1 ...): "
-                              "give one form per file");
+    throw FormatError(where +
+                      "the header has pose columns (x_mm ...) and joint columns (j1 ...): "
+                      "give one form per file");
   if (!pose_found && !joint_found)
     throw FormatError(where +
                       "the header names neither the pose columns x_mm,y_mm,z_mm,rz_deg,ry_deg,"
@@ -44,17 +45,16 @@ Header readHeader(const std::vector<std::string_view>& fields, bool& joints_form
   const auto& wanted = joints_form ? kJointColumns : kPoseColumns;
   for (size_t k = 0; k < wanted.size(); ++k) {
     h.values[k] = columnOf(fields, wanted[k]);
-    if (h.values[k] < 0)
-      throw FormatError(where + "the header has no column '" + wanted[k] + "'");
+    if (h.values[k] < 0) throw FormatError(where + "the header has no column '" + wanted[k] + "'");
   }
   h.name = columnOf(fields, "name");
   h.config = columnOf(fields, "config");
   if (h.config >= 0 && joints_form)
     throw FormatError(where + "column 'config': only for poses (joints fix the configuration)");
   for (size_t f = 0; f < fields.size(); ++f) {
-    const bool known = static_cast<int>(f) == h.name || static_cast<int>(f) == h.config ||
-                       std::find(h.values.begin(), h.values.end(), static_cast<int>(f)) !=
-                           h.values.end();
+    const bool known =
+        static_cast<int>(f) == h.name || static_cast<int>(f) == h.config ||
+        std::find(h.values.begin(), h.values.end(), static_cast<int>(f)) != h.values.end();
     if (!known)
       throw FormatError(where + "unknown column '" + std::string(fields[f]) +
                         "' (see docs/compensation.md)");

@@ -21,13 +21,17 @@ nlohmann::json compensateRequest(const ModelStore& models, const Model& nominal,
     for (const proto::CompensateTarget& target : request.targets) {
       CompensatedTarget r;
       if (const auto& p = target.pose_mm_deg)
-        r = compensator.forPose(poseFromXyzZyx((*p)[0], (*p)[1], (*p)[2], (*p)[3], (*p)[4], (*p)[5]));
+        r = compensator.forPose(
+            poseFromXyzZyx((*p)[0], (*p)[1], (*p)[2], (*p)[3], (*p)[4], (*p)[5]));
       else
         r = compensator.forNominalJoints(JointsDeg(target.joints_deg->data()));
-      proto::CompensatedRow row{target.name, compensationStatusName(r.status),
-                                armConfigName(r.config), r.reason, std::nullopt, std::nullopt};
-      if (r.status == CompensationStatus::kOk ||
-          r.status == CompensationStatus::kNearSingularity) {
+      proto::CompensatedRow row{target.name,
+                                compensationStatusName(r.status),
+                                armConfigName(r.config),
+                                r.reason,
+                                std::nullopt,
+                                std::nullopt};
+      if (r.status == CompensationStatus::kOk || r.status == CompensationStatus::kNearSingularity) {
         std::array<double, 6> joints{};
         for (int j = 0; j < kJointCount; ++j) joints[j] = r.joints_deg[j];
         row.joints_deg = joints;

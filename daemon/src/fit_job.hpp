@@ -21,8 +21,8 @@ namespace robocal::daemon {
 
 class FitJob {
  public:
-  FitJob(const Model& nominal, const WorkVolume& work_volume, ModelStore& models,
-         RunShared& shared, RunController::Publish publish)
+  FitJob(const Model& nominal, const WorkVolume& work_volume, ModelStore& models, RunShared& shared,
+         RunController::Publish publish)
       : nominal_(nominal),
         work_volume_(work_volume),
         models_(models),

@@ -129,8 +129,7 @@ std::string ModelStore::activate(int version) {
   const auto entry = readEntry(version);
   if (!entry) return "model version " + std::to_string(version) + " cannot be read (see the log)";
   if (!entry->usable)
-    return "model version " + std::to_string(version) +
-           " is not usable as a calibration: " +
+    return "model version " + std::to_string(version) + " is not usable as a calibration: " +
            (entry->problems.empty() ? std::string("(no reason recorded)") : entry->problems[0]);
   try {
     loadModelFile(file(version, ".json"));  // refuse what compensate could not read
@@ -163,13 +162,11 @@ std::optional<ModelStore::Active> ModelStore::active(std::string* problem) const
 
 void ModelStore::addCheck(int version, const proto::HealthCheckEntry& c) {
   const std::lock_guard lock(mutex_);
-  appendTextFileDurably(file(version, ".checks.jsonl"),
-                        json{{"run", c.run},
-                             {"date_utc", c.date_utc},
-                             {"verdict", c.verdict},
-                             {"rms_mm", c.rms_mm}}
-                                .dump() +
-                            "\n");
+  appendTextFileDurably(
+      file(version, ".checks.jsonl"),
+      json{{"run", c.run}, {"date_utc", c.date_utc}, {"verdict", c.verdict}, {"rms_mm", c.rms_mm}}
+              .dump() +
+          "\n");
 }
 
 }  // namespace robocal::daemon

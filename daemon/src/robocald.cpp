@@ -180,9 +180,9 @@ class Daemon {
         hub_.send(id, proto::toJson(run_.models().list()));
         break;
       case proto::Cmd::kActivate:
-        reply(run_.models().activate(req.model_version),
-              "model version " + std::to_string(req.model_version) +
-                  " is active: compensate uses it");
+        reply(run_.models().activate(req.model_version), "model version " +
+                                                             std::to_string(req.model_version) +
+                                                             " is active: compensate uses it");
         break;
       case proto::Cmd::kCompensate:
         hub_.send(id, compensateRequest(run_.models(), nominal_, req));

@@ -193,8 +193,10 @@ std::string compactNumberArrays(const std::string& text) {
     const char at = text[i];
     if (in_string) {  // strings are copied as they are, escapes included
       out += at;
-      if (at == '\\' && i + 1 < text.size()) out += text[++i];
-      else if (at == '"') in_string = false;
+      if (at == '\\' && i + 1 < text.size())
+        out += text[++i];
+      else if (at == '"')
+        in_string = false;
       ++i;
       continue;
     }

@@ -188,9 +188,12 @@ nlohmann::ordered_json cellToJson(const CellConfig& c) {
                             {"models", c.uncertainty.models},
                             {"seed", c.uncertainty.seed}};
   const WorkVolume& w = c.work_volume;
-  j["work_volume"] = {{"box_min_mm", w.box_min_mm},     {"box_max_mm", w.box_max_mm},
-                      {"rz_range_deg", w.rz_range_deg}, {"ry_range_deg", w.ry_range_deg},
-                      {"rx_range_deg", w.rx_range_deg}, {"poses", w.poses},
+  j["work_volume"] = {{"box_min_mm", w.box_min_mm},
+                      {"box_max_mm", w.box_max_mm},
+                      {"rz_range_deg", w.rz_range_deg},
+                      {"ry_range_deg", w.ry_range_deg},
+                      {"rx_range_deg", w.rx_range_deg},
+                      {"poses", w.poses},
                       {"seed", w.seed}};
   return j;
 }

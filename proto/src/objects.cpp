@@ -497,7 +497,8 @@ namespace {
 json sixOrNull(const std::optional<std::array<double, 6>>& v) {
   return v ? json(*v) : json(nullptr);
 }
-std::optional<std::array<double, 6>> readSix(const Reader& r, const json& j, const std::string& key) {
+std::optional<std::array<double, 6>> readSix(const Reader& r, const json& j,
+                                             const std::string& key) {
   const auto it = j.find(key);
   if (it == j.end() || it->is_null()) return std::nullopt;
   if (!it->is_array() || it->size() != 6) r.fail(key, "must be an array of 6 numbers");
@@ -523,14 +524,20 @@ json toJson(const Models& o) {
   for (const ModelEntry& m : o.models) {
     json checks = json::array();
     for (const HealthCheckEntry& c : m.checks)
-      checks.push_back({{"run", c.run},
-                        {"date_utc", c.date_utc},
-                        {"verdict", c.verdict},
-                        {"rms_mm", c.rms_mm}});
-    json e = {{"version", m.version},   {"file", m.file},         {"date_utc", m.date_utc},
-              {"run", m.run},           {"set", m.set},           {"samples", m.samples},
-              {"fit_rms_mm", m.fit_rms_mm}, {"rank", m.rank},     {"usable", m.usable},
-              {"problems", m.problems}, {"checks", checks},       {"active", m.active}};
+      checks.push_back(
+          {{"run", c.run}, {"date_utc", c.date_utc}, {"verdict", c.verdict}, {"rms_mm", c.rms_mm}});
+    json e = {{"version", m.version},
+              {"file", m.file},
+              {"date_utc", m.date_utc},
+              {"run", m.run},
+              {"set", m.set},
+              {"samples", m.samples},
+              {"fit_rms_mm", m.fit_rms_mm},
+              {"rank", m.rank},
+              {"usable", m.usable},
+              {"problems", m.problems},
+              {"checks", checks},
+              {"active", m.active}};
     e["work_volume_error_mm"] = m.work_volume_error_mm ? json(*m.work_volume_error_mm) : json();
     list.push_back(e);
   }
@@ -563,8 +570,8 @@ Models parseObject<Models>(const json& j) {
     const json& checks = e.array("checks");
     for (std::size_t k = 0; k < checks.size(); ++k) {
       const Reader c = e.element(checks[k], "checks", k);
-      m.checks.push_back({c.string("run"), c.string("date_utc"), c.string("verdict"),
-                          c.number("rms_mm")});
+      m.checks.push_back(
+          {c.string("run"), c.string("date_utc"), c.string("verdict"), c.number("rms_mm")});
     }
     m.active = e.boolean("active");
     out.models.push_back(std::move(m));

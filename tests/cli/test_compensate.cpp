@@ -35,8 +35,7 @@ TEST_CASE("[cli] robocal compensate returns a program's own joints when nothing 
   for (const char* r : rows) program += std::string(r) + "\n";
   writeFile(dir / "program.csv", program);
   const RunResult r = runRobocal("compensate --model " + kModel + " --nominal " + kModel +
-                                 " --targets " + dir / "program.csv" + " --out " +
-                                 dir / "out.csv");
+                                 " --targets " + dir / "program.csv" + " --out " + dir / "out.csv");
   INFO(r.output);
   REQUIRE(r.exit_code == 0);
   CHECK_THAT(r.output, Contains("3 ok, 0 not ok"));
@@ -61,13 +60,12 @@ TEST_CASE("[cli] robocal compensate and accuracy on a simulated calibration") {
   REQUIRE(runRobocal("simulate --model " + kModel + " --seed 3 --points-per-shell 40 --out " +
                      dir / "s.csv" + " --truth-out " + dir / "truth.json")
               .exit_code == 0);
-  REQUIRE(runRobocal("solve --model " + kModel + " " + dir / "s.csv" + " --out " +
-                     dir / "cal.json")
+  REQUIRE(runRobocal("solve --model " + kModel + " " + dir / "s.csv" + " --out " + dir / "cal.json")
               .exit_code == 0);
   SECTION("accuracy over the reference work volume, with the truth") {
-    const RunResult r = runRobocal("accuracy --nominal " + kModel + " --calibrated " +
-                                   dir / "cal.json" + " --truth " + dir / "truth.json" +
-                                   " --json --svg " + dir / "map.svg");
+    const RunResult r =
+        runRobocal("accuracy --nominal " + kModel + " --calibrated " + dir / "cal.json" +
+                   " --truth " + dir / "truth.json" + " --json --svg " + dir / "map.svg");
     REQUIRE(r.exit_code == 0);
     const auto j = nlohmann::json::parse(r.output);
     CHECK(j["ok"] == 200);

@@ -74,7 +74,8 @@ TEST_CASE("a program's joints come back unchanged when the calibrated model is t
   }
 }
 
-TEST_CASE("corrected readings reach the target in the calibrated model, in the same configuration") {
+TEST_CASE(
+    "corrected readings reach the target in the calibrated model, in the same configuration") {
   const Model nominal = puma560NominalModel();
   const Model truth = perturbed(7);
   CompensationOptions options;
@@ -88,8 +89,8 @@ TEST_CASE("corrected readings reach the target in the calibrated model, in the s
     REQUIRE(t.status == CompensationStatus::kOk);
     CHECK(t.config == PumaIk(nominal).configOf(q));
     // The true robot (here the calibrated model itself) puts the tool where the program meant.
-    const PoseDifference d = poseDifference(true_kin.toolPose(t.joints_deg) * options.tool,
-                                            comp.nominalToolPose(q));
+    const PoseDifference d =
+        poseDifference(true_kin.toolPose(t.joints_deg) * options.tool, comp.nominalToolPose(q));
     CHECK(d.position_mm < 1e-4);
     CHECK(d.angle_deg < 1e-6 * 57.3);
     CHECK(t.position_residual_mm == Approx(d.position_mm).margin(1e-9));
@@ -218,9 +219,9 @@ TEST_CASE("targets files: both forms, and malformed rows named by file:line") {
                     Contains("m.csv:1: the header has pose columns"));
   CHECK_THROWS_WITH(parseTargets("x_mm,y_mm,z_mm,rz_deg,ry_deg,rx_deg,speed\n", "m.csv"),
                     Contains("m.csv:1: unknown column 'speed'"));
-  CHECK_THROWS_WITH(parseTargets("x_mm,y_mm,z_mm,rz_deg,ry_deg,rx_deg,config\n1,2,3,4,5,6,up\n",
-                                 "m.csv"),
-                    Contains("m.csv:2: column 'config': unknown arm configuration 'up'"));
+  CHECK_THROWS_WITH(
+      parseTargets("x_mm,y_mm,z_mm,rz_deg,ry_deg,rx_deg,config\n1,2,3,4,5,6,up\n", "m.csv"),
+      Contains("m.csv:2: column 'config': unknown arm configuration 'up'"));
   CHECK_THROWS_WITH(parseTargets("\n# nothing\n", "e.csv"), Contains("e.csv: empty"));
 }
 

@@ -9,8 +9,8 @@
 
 #include <robocal/compensation/compensate.hpp>
 #include <robocal/formats/model_json.hpp>
-#include <robocal/kinematics/kinematics.hpp>
 #include <robocal/formats/samples_csv.hpp>
+#include <robocal/kinematics/kinematics.hpp>
 #include <robocal/planner/plan_json.hpp>
 #include <robocal/sim/operator.hpp>
 #include <robocal/solver/calibrate.hpp>
@@ -64,9 +64,8 @@ TEST_CASE("a full run to RESULT recovers the true robot", "[e2e]") {
                                  result["samples_file"].get<std::string>() + " --json");
   REQUIRE(solved.exit_code == 0);
   json without_run_keys = result;
-  for (const char* key :
-       {"run", "set", "extension_mm", "calibrated_file", "report_dir", "samples_file",
-        "model_version"})
+  for (const char* key : {"run", "set", "extension_mm", "calibrated_file", "report_dir",
+                          "samples_file", "model_version"})
     without_run_keys.erase(key);
   CHECK(json::parse(solved.output) == without_run_keys);
   CHECK(result["parameter_table"].size() == 54);
@@ -119,22 +118,20 @@ TEST_CASE("a full run to RESULT recovers the true robot", "[e2e]") {
   // A program point in the work volume near the chucks (where the calibration measured): the
   // nominal solution of a pose there.
   const Model nominal_model = loadModelFile(kModel);
-  const JointsDeg program =
-      Compensator(nominal_model, nominal_model)
-          .forPose(poseFromXyzZyx(-50, 30, 260, 10, 130, -10))
-          .joints_deg;
+  const JointsDeg program = Compensator(nominal_model, nominal_model)
+                                .forPose(poseFromXyzZyx(-50, 30, 260, 10, 130, -10))
+                                .joints_deg;
   const json pose_target = {{"name", "p1"}, {"pose_mm_deg", {0, 0, 250, 0, 135, 0}}};
   const json joints_target = {
-      {"name", "j1"},
-      {"joints_deg", std::vector<double>(program.data(), program.data() + 6)}};
+      {"name", "j1"}, {"joints_deg", std::vector<double>(program.data(), program.data() + 6)}};
   const json compensate = {{"cmd", "compensate"}, {"targets", {pose_target, joints_target}}};
   CHECK_THAT(c->request(compensate, 10, "ERROR")["message"].get<std::string>(),
              Contains("no model is active"));
   CHECK(c->request({{"cmd", "activate"}, {"version", version}}, 10, "ERROR")["class"] == "ERROR");
   CHECK(c->request({{"cmd", "activate"}, {"version", version + 5}, {"token", cell.daemon->token()}},
                    10, "ERROR")["class"] == "ERROR");
-  CHECK(c->request({{"cmd", "activate"}, {"version", version}, {"token", cell.daemon->token()}},
-                   10, "ACK")["class"] == "ACK");
+  CHECK(c->request({{"cmd", "activate"}, {"version", version}, {"token", cell.daemon->token()}}, 10,
+                   "ACK")["class"] == "ACK");
   const json answer = c->request(compensate, 10, "COMPENSATED");
   REQUIRE(answer["class"] == "COMPENSATED");
   CHECK(answer["model"] == version);

@@ -35,9 +35,9 @@ TEST_CASE("models, activate and compensate requests are validated field by field
   CHECK(parseRequest(R"({"cmd":"models"})").cmd == Cmd::kModels);
   CHECK(parseRequest(R"({"cmd":"activate","version":4})").model_version == 4);
   CHECK_THROWS_WITH(parseRequest(R"({"cmd":"activate"})"), Contains("activate needs \"version\""));
-  const Request r = parseRequest(
-      R"({"cmd":"compensate","targets":[{"name":"a","pose_mm_deg":[1,2,3,4,5,6]},)"
-      R"({"joints_deg":[0,10,20,30,40,50]}],"tool_mm_deg":[0,0,100,0,0,0]})");
+  const Request r =
+      parseRequest(R"({"cmd":"compensate","targets":[{"name":"a","pose_mm_deg":[1,2,3,4,5,6]},)"
+                   R"({"joints_deg":[0,10,20,30,40,50]}],"tool_mm_deg":[0,0,100,0,0,0]})");
   REQUIRE(r.targets.size() == 2);
   CHECK(r.targets[0].name == "a");
   CHECK((*r.targets[0].pose_mm_deg)[2] == 3);
@@ -53,7 +53,8 @@ TEST_CASE("models, activate and compensate requests are validated field by field
   CHECK_THROWS_WITH(parseRequest(R"({"cmd":"compensate","targets":[{"name":"x"}]})"),
                     Contains("targets[0] needs one of"));
   std::string many = R"({"cmd":"compensate","targets":[)";
-  for (int i = 0; i <= 1000; ++i) many += std::string(i ? "," : "") + R"({"joints_deg":[0,0,0,0,0,0]})";
+  for (int i = 0; i <= 1000; ++i)
+    many += std::string(i ? "," : "") + R"({"joints_deg":[0,0,0,0,0,0]})";
   CHECK_THROWS_WITH(parseRequest(many + "]}"), Contains("at most 1000"));
   CHECK(needsToken(Cmd::kActivate));
   CHECK_FALSE(needsToken(Cmd::kModels));

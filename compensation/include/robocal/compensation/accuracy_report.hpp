@@ -11,8 +11,9 @@
 namespace robocal {
 
 // {"poses_from", "poses", "ok", "predicted_position_error_mm": {"rms", "p95", "max"},
-//  "predicted_orientation_error_deg": {...}, and with a truth "nominal_commanded_position_error_mm",
-//  "compensated_commanded_...", "calibrated_model_..." (position and orientation)}; with
+//  "predicted_orientation_error_deg": {...}, and with a truth
+//  "nominal_commanded_position_error_mm", "compensated_commanded_...", "calibrated_model_..."
+//  (position and orientation)}; with
 // `per_pose`, also "per_pose": one object per target (pose, status, joints, errors).
 nlohmann::ordered_json accuracyJson(const AccuracyReport& report, bool per_pose = false);
 

@@ -32,9 +32,9 @@ std::optional<Eigen::Isometry3d> parsePoseText(const std::string& text);
 
 enum class CompensationStatus {
   kOk,
-  kUnreachable,       // no configuration reaches the pose, or the solution did not converge
-  kNearSingularity,   // solved, but within the singularity margins: small errors, large motions
-  kOutsideLimits,     // solved, but no turn of some joint lies inside its limits
+  kUnreachable,      // no configuration reaches the pose, or the solution did not converge
+  kNearSingularity,  // solved, but within the singularity margins: small errors, large motions
+  kOutsideLimits,    // solved, but no turn of some joint lies inside its limits
 };
 // "ok", "unreachable", "near_singularity", "outside_limits": the files' and protocol's words.
 const char* compensationStatusName(CompensationStatus status);
@@ -55,8 +55,8 @@ struct CompensatedTarget {
   std::string reason;  // why the status is not ok, in words; empty when ok
   ArmConfig config;
   Eigen::Isometry3d target = Eigen::Isometry3d::Identity();  // the desired tool pose (world)
-  JointsDeg nominal_joints_deg = JointsDeg::Zero();  // the nominal model's solution
-  JointsDeg joints_deg = JointsDeg::Zero();          // corrected readings (the calibrated model's)
+  JointsDeg nominal_joints_deg = JointsDeg::Zero();          // the nominal model's solution
+  JointsDeg joints_deg = JointsDeg::Zero();  // corrected readings (the calibrated model's)
   // 1-sigma tool position (mm) and orientation (deg) error of the calibrated model at the
   // corrected readings, from its covariance; NaN when the model has none.
   double predicted_position_error_mm = 0;

@@ -17,11 +17,11 @@
 namespace robocal {
 
 struct Target {
-  std::string name;                        // "" when the file has no name column
-  std::optional<Eigen::Isometry3d> pose;   // the pose form: desired tool pose (world frame)
-  std::optional<ArmConfig> config;         // the pose form's optional config column
-  std::optional<JointsDeg> nominal_joints; // the joints form
-  int line = 0;                            // 1-based line in the file
+  std::string name;                         // "" when the file has no name column
+  std::optional<Eigen::Isometry3d> pose;    // the pose form: desired tool pose (world frame)
+  std::optional<ArmConfig> config;          // the pose form's optional config column
+  std::optional<JointsDeg> nominal_joints;  // the joints form
+  int line = 0;                             // 1-based line in the file
 };
 
 struct TargetFile {

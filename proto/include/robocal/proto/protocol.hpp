@@ -8,10 +8,10 @@
 
 #include <array>
 #include <optional>
-#include <vector>
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace robocal::proto {
 
@@ -70,7 +70,7 @@ struct Request {
   std::string run_id;        // resume: an interrupted run to continue (default: the latest)
   std::string reason;        // pause / abort: the operator's words, for the log
   int model_version = 0;     // activate: the model to make active
-  std::vector<CompensateTarget> targets;            // compensate
+  std::vector<CompensateTarget> targets;             // compensate
   std::optional<std::array<double, 6>> tool_mm_deg;  // compensate: TCP in the ball fixture frame
 };
 
