@@ -1,5 +1,7 @@
 #include <robocal/formats/urdf.hpp>
 
+#include "report_parts.hpp"
+
 #include <robocal/build_info.hpp>
 #include <robocal/kinematics/units.hpp>
 
@@ -38,28 +40,11 @@ std::string commentText(const std::string& text) {
   return out;
 }
 
-// Free text as an XML attribute value in double quotes.
-std::string attribute(const std::string& text) {
-  std::string out;
-  for (const char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += static_cast<unsigned char>(c) < 0x20 ? ' ' : c;
-    }
-  }
-  return out;
+// Free text as an XML attribute value in double quotes: control characters become blanks.
+std::string attribute(std::string text) {
+  for (char& c : text)
+    if (static_cast<unsigned char>(c) < 0x20) c = ' ';
+  return report_detail::escapeXml(text);
 }
 
 // Fixed-axis roll, pitch, yaw of a rotation: r = Rz(yaw) * Ry(pitch) * Rx(roll). Roll is taken
