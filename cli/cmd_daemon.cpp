@@ -78,6 +78,15 @@ int show(const json& reply, bool as_json) {
     std::fputs(resultText(proto::parseObject<proto::Result>(reply)).c_str(), stdout);
   } else if (cls == proto::Runs::kClass) {
     std::fputs(runsText(proto::parseObject<proto::Runs>(reply)).c_str(), stdout);
+  } else if (cls == proto::Check::kClass) {
+    const auto c = proto::parseObject<proto::Check>(reply);
+    if (!c.available)
+      std::printf("%s\n", c.message.c_str());
+    else
+      std::printf("run %s, model version %d, %s\n%s", c.run.c_str(), c.model_version,
+                  c.date_utc.c_str(), c.text.c_str());
+    // As robocal health: 0 pass, 4 warn, 5 fail (docs/health-check.md).
+    if (c.available && c.status != "pass") return c.status == "warn" ? 4 : 5;
   } else if (cls == proto::Models::kClass) {
     std::fputs(modelsText(proto::parseObject<proto::Models>(reply)).c_str(), stdout);
   } else if (cls == proto::Plan::kClass) {
@@ -103,8 +112,9 @@ std::string cellsimControl(const std::string& socket_path, const std::string& co
 
 int simple(const std::vector<std::string>& argv, const char* cmd, bool with_token,
            const std::set<std::string>& extra, const std::function<void(const Args&, json&)>& fill,
-           const char* help) {
-  const Args args(argv, valued(extra), {"json", "help"});
+           const char* help, std::set<std::string> flags = {}) {
+  flags.insert({"json", "help"});
+  const Args args(argv, valued(extra), flags);
   if (args.flag("help")) {
     std::printf("%s%s", help, kCommon);
     return 0;
@@ -159,10 +169,21 @@ int start(const std::vector<std::string>& argv) {
       argv, "start", true, {},
       [](const Args& a, json& r) {
         if (a.positional().size() > 1) throw UsageError("one plan file at most");
+        if (a.flag("check") && !a.positional().empty())
+          throw UsageError("--check runs the health check's own plan: no plan file with it");
         if (!a.positional().empty()) r["plan"] = a.positional()[0];
+        if (a.flag("check")) r["check"] = true;
       },
-      "usage: robocal start [PLAN.json] [options]\n  Starts a calibration run (with the daemon's "
-      "plan, or PLAN.json as robocald sees the path).\n");
+      "usage: robocal start [PLAN.json | --check] [options]\n  Starts a calibration run (with the "
+      "daemon's plan, or PLAN.json as robocald sees the path).\n  --check starts the ten-minute "
+      "health check of the active model instead (docs/health-check.md).\n",
+      {"check"});
+}
+int checkResult(const std::vector<std::string>& argv) {
+  return simple(argv, "check_result", false, {}, {},
+                "usage: robocal check-result [options]\n  The latest health check's verdict: "
+                "pass, warn or fail, and what moved.\n  exit status: 0 pass (or no check yet), 4 "
+                "warn, 5 fail, 1 an error\n");
 }
 int confirm(const std::vector<std::string>& argv) {
   return simple(
@@ -339,6 +360,8 @@ const RegisterCommand r6({"resume", "robocald: resume a paused or interrupted ru
 const RegisterCommand r7({"abort", "robocald: stop the robot and end the run", abortRun});
 const RegisterCommand r8({"result", "robocald: the latest fit", result});
 const RegisterCommand r9({"runs", "robocald: the run history", runs});
+const RegisterCommand r14({"check-result", "robocald: the latest health check's verdict",
+                           checkResult});
 const RegisterCommand r12({"models", "robocald: the stored calibrated models", models});
 const RegisterCommand r13({"activate", "robocald: make a stored model the active one", activate});
 

@@ -49,6 +49,8 @@ DaemonConfig daemonConfigFromJson(const json& root, const std::string& source,
   getPath(r, "log_file", base_dir, c.log_file);
   r.get("log_level", c.log_level);
   r.get("watchdog_interval_s", c.watchdog_interval_s, 0, 3600);
+  r.get("check_warn_ratio", c.check_warn_ratio, 1.0, 100);
+  r.get("check_fail_ratio", c.check_fail_ratio, 1.0, 100);
   if (const json* d = r.find("drivers")) {
     try {
       c.drivers = drivers::driversConfigFromJson(*d, source + ": drivers");
@@ -62,6 +64,8 @@ DaemonConfig daemonConfigFromJson(const json& root, const std::string& source,
     r.fail("cell", "missing: a cell file (or a fixed plan) is required");
   if (c.bar_soft_limit_mm >= c.bar_hard_limit_mm)
     r.fail("bar_soft_limit_mm", "must be below bar_hard_limit_mm");
+  if (c.check_warn_ratio > c.check_fail_ratio)
+    r.fail("check_warn_ratio", "must not be above check_fail_ratio");
   static const std::set<std::string> levels = {"trace", "debug", "info", "warn", "error"};
   if (!levels.count(c.log_level)) r.fail("log_level", "one of trace, debug, info, warn, error");
   if (c.token_file.empty()) c.token_file = (std::filesystem::path(c.data_dir) / "token").string();

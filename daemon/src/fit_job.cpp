@@ -2,6 +2,7 @@
 
 #include <robocal/compensation/accuracy_report.hpp>
 #include <robocal/formats/model_json.hpp>
+#include <robocal/solver/health_report.hpp>
 #include <robocal/formats/report.hpp>
 #include <robocal/formats/samples_csv.hpp>
 #include <robocal/solver/assessment.hpp>
@@ -119,6 +120,46 @@ void FitJob::launch(RunDir dir, std::vector<Sample> samples, double set_extensio
                    false);
         }
       });
+}
+
+void FitJob::launchCheck(RunDir dir, std::vector<Sample> samples) {
+  wait();
+  running_ = std::async(std::launch::async, [this, dir, samples = std::move(samples)]() mutable {
+    try {
+      std::string problem;
+      const auto active = models_.active(&problem);
+      if (!active) throw std::runtime_error("no verdict: " + problem);
+      const HealthVerdict verdict = assessHealth(active->model, samples, health_);
+      proto::Check check;
+      check.run = dir.id();
+      check.model_version = active->version;
+      check.date_utc = dateUtcNow();
+      check.status = healthStatusName(verdict.status);
+      check.text = healthVerdictText(verdict);
+      check.verdict = healthVerdictJson(verdict);
+      const json object = proto::toJson(check);
+      dir.writeJson("check.json", object);
+      json moved = json::array();
+      for (const ParameterChange& c : verdict.moved) moved.push_back(c.text);
+      dir.logEvent({{"event", "health_check"},
+                    {"status", check.status},
+                    {"model_version", check.model_version},
+                    {"rms_mm", verdict.residuals.rms_mm},
+                    {"rms_ratio", verdict.rms_ratio},
+                    {"moved", moved}});
+      models_.addCheck(active->version,
+                       {dir.id(), check.date_utc, check.status, verdict.residuals.rms_mm});
+      spdlog::info("health check of model {}: {} ({})", active->version, check.status,
+                   verdict.reason);
+      shared_.with([&](RunData& d) { d.last_check = object; });
+      publish_(object, false);
+    } catch (const std::exception& e) {
+      spdlog::error("health check failed: {}", e.what());
+      dir.logEvent({{"event", "health_check"}, {"error", e.what()}});
+      publish_(proto::toJson(proto::Error{std::string("health check: ") + e.what(), {}, {}}),
+               false);
+    }
+  });
 }
 
 }  // namespace robocal::daemon

@@ -13,6 +13,7 @@
 #include <robocal/kinematics/model.hpp>
 #include <robocal/kinematics/sample.hpp>
 #include <robocal/planner/cell.hpp>
+#include <robocal/solver/health.hpp>
 
 #include <future>
 #include <vector>
@@ -36,6 +37,10 @@ class FitJob {
   // is what the run measured: the samples file is read back and fitted when it holds the same
   // number, so that the RESULT is `robocal solve --json` of that file.
   void launch(RunDir dir, std::vector<Sample> samples, double set_extension_mm, int set_index);
+  // A health check run's end: its samples judged against the active model (solver/health.hpp);
+  // the verdict goes to the run folder (check.json), the event log, the model's history and the
+  // clients (CHECK).
+  void launchCheck(RunDir dir, std::vector<Sample> samples);
   void wait() {
     if (running_.valid()) running_.wait();
   }
@@ -43,6 +48,7 @@ class FitJob {
  private:
   const Model& nominal_;
   const WorkVolume work_volume_;
+  const HealthOptions health_;
   ModelStore& models_;
   RunShared& shared_;
   const RunController::Publish publish_;

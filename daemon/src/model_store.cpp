@@ -17,14 +17,6 @@ namespace {
 namespace fs = std::filesystem;
 using json = nlohmann::json;
 
-std::string dateUtcNow() {
-  const std::time_t t = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
-}
 
 // The versions with a model file, ascending.
 std::vector<int> versionsIn(const std::string& dir) {
@@ -41,6 +33,15 @@ std::vector<int> versionsIn(const std::string& dir) {
 }
 
 }  // namespace
+
+std::string dateUtcNow() {
+  const std::time_t t = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
 
 ModelStore::ModelStore(std::string data_dir) : dir_(std::move(data_dir) + "/models") {
   fs::create_directories(dir_);

@@ -10,6 +10,7 @@
 #include <robocal/formats/model_json.hpp>
 #include <robocal/planner/cell_json.hpp>
 #include <robocal/planner/check.hpp>
+#include <robocal/planner/health_plan.hpp>
 #include <robocal/planner/plan_json.hpp>
 #include <robocal/proto/protocol.hpp>
 
@@ -149,11 +150,17 @@ class Daemon {
         hub_.send(id, run_.runs());
         break;
       case proto::Cmd::kPlan:
-        makePlan(id, req.plan_path, req.cell_path, false);
+        makePlan(id, req.plan_path, req.cell_path, req.check, false);
         break;
       case proto::Cmd::kStart:
-        if (!req.plan_path.empty() || !plan_)
-          makePlan(id, req.plan_path, {}, true);
+        if (req.check) {
+          std::string problem;  // a verdict needs a model to judge
+          if (!run_.models().active(&problem))
+            reply("the health check judges the active model: " + problem);
+          else
+            makePlan(id, {}, {}, true, true);
+        } else if (!req.plan_path.empty() || !plan_)
+          makePlan(id, req.plan_path, {}, false, true);
         else {
           hub_.send(id, planObject(*plan_, plan_source_));  // the plan the run will follow
           reply(run_.start(*plan_), "run starting with " + plan_source_);
@@ -187,6 +194,9 @@ class Daemon {
       case proto::Cmd::kCompensate:
         hub_.send(id, compensateRequest(run_.models(), nominal_, req));
         break;
+      case proto::Cmd::kCheckResult:
+        hub_.send(id, run_.checkResult());
+        break;
     }
   }
 
@@ -202,7 +212,7 @@ class Daemon {
   // Loads or makes a plan on a worker thread (planning takes up to seconds), then replies on the
   // event loop and, for start, starts the run with it.
   void makePlan(ClientHub::ClientId id, const std::string& plan_path, const std::string& cell_path,
-                bool then_start) {
+                bool check, bool then_start) {
     if (planning_) {
       hub_.send(id, proto::errorObject("a plan is being made; try again in a moment", "plan"));
       return;
@@ -210,13 +220,17 @@ class Daemon {
     planning_ = true;
     if (plan_worker_.joinable()) plan_worker_.join();  // the last one has posted its answer
     const std::string path =
-        !plan_path.empty() ? plan_path : (cell_path.empty() ? config_.plan : "");
-    plan_worker_ = std::thread([this, id, path, cell_path, then_start] {
+        !plan_path.empty() ? plan_path : (cell_path.empty() && !check ? config_.plan : "");
+    plan_worker_ = std::thread([this, id, path, cell_path, check, then_start] {
       std::optional<Plan> plan;
       std::string source, error;
       json violation_list = json::array();
       try {
-        if (!path.empty()) {
+        if (check) {
+          if (!cell_) throw std::runtime_error("no cell configured to plan the health check with");
+          plan = planHealthCheck(nominal_, *cell_);
+          source = "the health check of " + config_.cell;
+        } else if (!path.empty()) {
           plan = loadPlanFile(path);
           source = path;
         } else {

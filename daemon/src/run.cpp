@@ -25,6 +25,13 @@ using json = nlohmann::json;
 using proto::RunState;
 }  // namespace
 
+HealthOptions healthOptions(const DaemonConfig& config) {
+  HealthOptions o;
+  o.warn_ratio = config.check_warn_ratio;
+  o.fail_ratio = config.check_fail_ratio;
+  return o;
+}
+
 struct RunController::Impl {
   using Clock = std::chrono::steady_clock;
   DaemonConfig config;
@@ -47,7 +54,8 @@ struct RunController::Impl {
         models(config.data_dir),
         cell_io(io ? std::move(io) : makeDriverCell(config)),
         ctx(config, nominal, cell, publish, store, shared, *cell_io),
-        fits(nominal, cell ? cell->work_volume : WorkVolume{}, models, shared, publish) {
+        fits(nominal, cell ? cell->work_volume : WorkVolume{}, healthOptions(config), models,
+             shared, publish) {
     recoverFromDisk();
     ctx.connectDevices();  // the ports' state is in the log from the start
     thread = std::thread([this] { threadMain(); });
@@ -87,6 +95,7 @@ struct RunController::Impl {
                    d.last_result["set"].get<long>());
     }
     for (const std::string& why : unreadable) spdlog::warn("result file skipped: {}", why);
+    if (auto c = store.latestCheck()) d.last_check = std::move(*c);
     std::string bar_problem;
     d.attachment = store.barAttachment(&bar_problem);
     if (!bar_problem.empty()) spdlog::warn("{}", bar_problem);
@@ -370,6 +379,14 @@ nlohmann::json RunController::result() const {
       return proto::toJson(
           proto::Result{false, "no fit yet", {}, 0, 0, {}, {}, {}, json::object()});
     return d.last_result;
+  });
+}
+
+nlohmann::json RunController::checkResult() const {
+  return impl_->shared.with([](const RunData& d) -> json {
+    if (d.last_check.is_null())
+      return proto::toJson(proto::Check{false, "no health check yet", {}, 0, {}, {}, {}, {}});
+    return d.last_check;
   });
 }
 

@@ -52,6 +52,7 @@ struct RunData {
   // Devices and results.
   std::optional<proto::Bar> latest_bar;
   nlohmann::json last_result;
+  nlohmann::json last_check;  // the latest CHECK (a health check's verdict), null before one
   DeviceState devices;
   BarAttachment attachment;      // persisted in <data_dir>/bar.json
   std::vector<RunSummary> runs;  // oldest first; kept by the run thread as it writes them

@@ -139,6 +139,20 @@ std::optional<std::string> RunStore::latestUnfinished() const {
   return std::nullopt;
 }
 
+std::optional<nlohmann::json> RunStore::latestCheck() const {
+  const auto all = ids();
+  for (auto it = all.rbegin(); it != all.rend(); ++it) {
+    const std::string path = runs_dir_ + "/" + *it + "/check.json";
+    if (!fs::exists(path)) continue;
+    try {
+      nlohmann::json c = nlohmann::json::parse(readTextFile(path));
+      if (c.is_object() && c.value("class", "") == "CHECK") return c;
+    } catch (const std::exception&) {  // an older check is served instead
+    }
+  }
+  return std::nullopt;
+}
+
 std::optional<nlohmann::json> RunStore::latestResult(std::vector<std::string>* skipped) const {
   const auto all = ids();
   for (auto it = all.rbegin(); it != all.rend(); ++it) {

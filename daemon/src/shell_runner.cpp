@@ -376,7 +376,10 @@ void ShellRunner::completeSet(std::size_t shell_index) {
   }
   const int set_index = static_cast<int>(seen.size());
   ctx_.event(dir_, {{"event", "set_complete"}, {"set", set_index}, {"extension_mm", extension_mm}});
-  fits_.launch(dir_, samples_, extension_mm, set_index);
+  if (plan_.purpose == PlanPurpose::kCheck)
+    fits_.launchCheck(dir_, samples_);  // a verdict on the active model, not a new fit
+  else
+    fits_.launch(dir_, samples_, extension_mm, set_index);
 }
 
 }  // namespace robocal::daemon

@@ -613,4 +613,28 @@ Compensated parseObject<Compensated>(const json& j) {
   return out;
 }
 
+json toJson(const Check& o) {
+  if (!o.available) return {{"class", Check::kClass}, {"available", false}, {"message", o.message}};
+  return {{"class", Check::kClass}, {"run", o.run},       {"model_version", o.model_version},
+          {"date_utc", o.date_utc}, {"status", o.status}, {"text", o.text},
+          {"verdict", o.verdict}};
+}
+template <>
+Check parseObject<Check>(const json& j) {
+  const Reader r = open(j, Check::kClass);
+  Check out;
+  if (r.find("available", false) && !r.boolean("available")) {
+    out.available = false;
+    out.message = r.optString("message").value_or("");
+    return out;
+  }
+  out.run = r.string("run");
+  out.model_version = r.integer("model_version");
+  out.date_utc = r.string("date_utc");
+  out.status = r.string("status");
+  out.text = r.string("text");
+  out.verdict = r.object("verdict");
+  return out;
+}
+
 }  // namespace robocal::proto

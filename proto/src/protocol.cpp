@@ -12,7 +12,7 @@
 namespace robocal::proto {
 namespace {
 
-constexpr std::array<std::pair<Cmd, const char*>, 14> kCmds = {{{Cmd::kStatus, "status"},
+constexpr std::array<std::pair<Cmd, const char*>, 15> kCmds = {{{Cmd::kStatus, "status"},
                                                                 {Cmd::kNudge, "nudge"},
                                                                 {Cmd::kWatch, "watch"},
                                                                 {Cmd::kPlan, "plan"},
@@ -25,7 +25,8 @@ constexpr std::array<std::pair<Cmd, const char*>, 14> kCmds = {{{Cmd::kStatus, "
                                                                 {Cmd::kRuns, "runs"},
                                                                 {Cmd::kModels, "models"},
                                                                 {Cmd::kActivate, "activate"},
-                                                                {Cmd::kCompensate, "compensate"}}};
+                                                                {Cmd::kCompensate, "compensate"},
+                                                                {Cmd::kCheckResult, "check_result"}}};
 
 using json = nlohmann::json;
 
@@ -108,6 +109,7 @@ bool needsToken(Cmd cmd) {
     case Cmd::kRuns:
     case Cmd::kModels:
     case Cmd::kCompensate:  // computes joints; moves nothing
+    case Cmd::kCheckResult:
       return false;
     default:
       return true;
@@ -133,7 +135,7 @@ Request parseRequest(std::string_view line) {
   if (!cmd)
     throw RequestError("unknown cmd \"" + name +
                            "\" (status, watch, plan, start, confirm, nudge, pause, resume, abort, "
-                           "result, runs, models, activate, compensate)",
+                           "result, runs, models, activate, compensate, check_result)",
                        name);
   req.token = stringField(obj, "token", name);
   switch (req.cmd) {
@@ -142,14 +144,18 @@ Request parseRequest(std::string_view line) {
         req.watch_enable = v->get<bool>();
       break;
     case Cmd::kPlan:
+    case Cmd::kStart:
       req.plan_path = stringField(obj, "plan", name);
-      req.cell_path = stringField(obj, "cell", name);
+      if (req.cmd == Cmd::kPlan) req.cell_path = stringField(obj, "cell", name);
+      if (const json* v = field(obj, "check", json::value_t::boolean, "true or false", name))
+        req.check = v->get<bool>();
       if (!req.plan_path.empty() && !req.cell_path.empty())
         throw RequestError("plan takes \"plan\" (load a file) or \"cell\" (make one), not both",
                            name);
-      break;
-    case Cmd::kStart:
-      req.plan_path = stringField(obj, "plan", name);
+      if (req.check && !req.cell_path.empty())
+        throw RequestError("\"check\" plans from the configured cell: not with \"cell\"", name);
+      if (req.check && !req.plan_path.empty())
+        throw RequestError("\"check\" makes the health check's plan: not with \"plan\"", name);
       break;
     case Cmd::kConfirm:
       if (const json* v =

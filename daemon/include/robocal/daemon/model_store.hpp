@@ -20,6 +20,9 @@
 
 namespace robocal::daemon {
 
+// Now as the models' and checks' dates: "2026-12-02T08:00:00Z" (UTC).
+std::string dateUtcNow();
+
 class ModelStore {
  public:
   explicit ModelStore(std::string data_dir);

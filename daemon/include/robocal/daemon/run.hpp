@@ -53,6 +53,8 @@ class RunController {
   proto::Status status() const;
   nlohmann::json result() const;  // the latest RESULT object (or an empty one)
   nlohmann::json runs() const;    // a RUNS object
+  // The latest CHECK (a health check's verdict; "available": false before the first).
+  nlohmann::json checkResult() const;
   // The calibrated models the fits have stored (thread-safe; docs/robocald.md, "Models").
   ModelStore& models();
 

@@ -63,6 +63,10 @@ class RunStore {
   // `skipped`, so a restarted daemon can say why an older result is served.
   std::optional<nlohmann::json> latestResult(std::vector<std::string>* skipped = nullptr) const;
 
+  // The newest health check's verdict on disk: check.json of the newest run that has a readable
+  // one (a CHECK object).
+  std::optional<nlohmann::json> latestCheck() const;
+
   // The bar's attachment (durably written before the caller goes on). `problem` gets why a
   // damaged file was taken as "attached".
   BarAttachment barAttachment(std::string* problem = nullptr) const;

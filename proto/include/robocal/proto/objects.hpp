@@ -252,6 +252,22 @@ struct Compensated {
   bool operator==(const Compensated&) const = default;
 };
 
+// CHECK: a health check's verdict (docs/health-check.md), at the end of a check run and in reply
+// to check_result. `verdict` holds the verdict's fields (status, rms_mm, rms_ratio, moved, ...),
+// `text` the same for a person. Before the first check only `available` (false) and `message`.
+struct Check {
+  static constexpr const char* kClass = "CHECK";
+  bool available = true;
+  std::string message;  // available == false only
+  std::string run;
+  int model_version = 0;
+  std::string date_utc;
+  std::string status;  // pass, warn, fail
+  std::string text;
+  nlohmann::json verdict = nlohmann::json::object();
+  bool operator==(const Check&) const = default;
+};
+
 // STATUS: every field is always present. `devices` has val_error / bar_error while that device is
 // not connected; `bar`, `prompt` and `plan` are null when there is none.
 struct Devices {
@@ -313,6 +329,7 @@ nlohmann::json toJson(const Runs& o);
 nlohmann::json toJson(const Status& o);
 nlohmann::json toJson(const Models& o);
 nlohmann::json toJson(const Compensated& o);
+nlohmann::json toJson(const Check& o);
 
 // The object as a T; ObjectError naming the class and field when it is not one.
 template <class T>
@@ -350,5 +367,7 @@ template <>
 Models parseObject<Models>(const nlohmann::json& object);
 template <>
 Compensated parseObject<Compensated>(const nlohmann::json& object);
+template <>
+Check parseObject<Check>(const nlohmann::json& object);
 
 }  // namespace robocal::proto

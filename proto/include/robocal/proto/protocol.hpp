@@ -33,7 +33,8 @@ enum class Cmd {
   kRuns,
   kModels,
   kActivate,
-  kCompensate
+  kCompensate,
+  kCheckResult
 };
 const char* cmdName(Cmd cmd);
 
@@ -64,6 +65,7 @@ struct Request {
   // Command fields (validated by parseRequest):
   bool watch_enable = true;  // watch
   std::string plan_path;     // plan (a plan file to load) and start (optional)
+  bool check = false;        // plan, start: the health check's plan (docs/health-check.md)
   std::string cell_path;     // plan: plan from this cell file instead of the configured one
   std::optional<int> shell;  // confirm, nudge: the shell of the pending prompt (must match)
   double nudge_mm = 0;       // nudge: move the ball this far along the bar (+: away from the chuck)
