@@ -3,16 +3,21 @@
 #include <catch2/catch.hpp>
 
 #include <robocal/formats/model_json.hpp>
+#include <robocal/kinematics/kinematics.hpp>
 #include <robocal/planner/cell_json.hpp>
 #include <robocal/planner/check.hpp>
 #include <robocal/planner/health_plan.hpp>
 #include <robocal/planner/plan_json.hpp>
+#include <robocal/sim/measurements.hpp>
+#include <robocal/solver/calibrate.hpp>
+#include <robocal/solver/health.hpp>
 
 #include <unistd.h>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <random>
 #include <sstream>
 #include <string>
 
@@ -182,6 +187,51 @@ TEST_CASE("the plan file says what the plan is for; old files are calibration pl
   CHECK(std::string(planPurposeName(PlanPurpose::kCheck)) == "check");
   CHECK(parsePlanPurpose("calibration") == PlanPurpose::kCalibration);
   CHECK_FALSE(parsePlanPurpose("Check").has_value());
+}
+
+TEST_CASE("the check plan's own points: an unchanged robot passes, a moved joint 2 fails") {
+  // A calibrated model of a perturbed truth (nine shells at 0 and at 150 mm), then the check
+  // plan's points measured on that truth and on the truth with joint 2's offset moved.
+  const Model& nom = nominal();
+  const Plan& plan = checkPlanOfDefaultCell();
+  std::mt19937_64 rng(5);
+  const Model truth = perturbModel(nom, PerturbationSigmas{}, rng);
+  std::vector<Sample> calibration;
+  int shell = 1;
+  for (double extension : {0.0, 150.0})
+    for (const Connection& c : allConnections()) {
+      ShellRequest req;
+      req.connection = c;
+      req.radius_mm = kDefaultBarMm + extension;
+      req.extension_mm = extension;
+      req.points = 40;
+      req.shell = shell++;
+      const auto poses = shellPoses(nom, req, rng).poses;
+      const auto s = measureShell(truth, req, poses, {0.084, 0}, rng);
+      calibration.insert(calibration.end(), s.begin(), s.end());
+    }
+  const SolveResult fit = solveCalibration(nom, calibration);
+  Model active = withParams(nom, fit.params);
+  active.provenance = ModelProvenance{};
+  active.provenance->rms_mm = fit.after.rms_mm;
+
+  auto checkSamples = [&](const Model& robot) {
+    std::normal_distribution<double> noise(0, 0.084);
+    std::vector<Sample> out = planSamples(robot, plan);
+    for (Sample& s : out) s.length_mm += noise(rng);
+    return out;
+  };
+  const HealthVerdict same = assessHealth(active, checkSamples(truth));
+  CHECK(same.samples == static_cast<size_t>(plan.summary.points));
+  CHECK(same.status == HealthStatus::kPass);
+  CHECK(same.moved.empty());
+  Model moved = truth;
+  moved.joints[1].offset_deg += 0.05;
+  const HealthVerdict changed = assessHealth(active, checkSamples(moved));
+  CHECK(changed.status == HealthStatus::kFail);
+  REQUIRE_FALSE(changed.moved.empty());
+  CHECK(changed.moved[0].name == "J2.offset");
+  CHECK(changed.moved[0].change == Approx(0.05).margin(0.01));
 }
 
 TEST_CASE("robocal plan --check writes the check plan and check-plan accepts it", "[cli]") {
