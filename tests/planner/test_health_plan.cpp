@@ -168,7 +168,7 @@ TEST_CASE("check-plan accepts the check plan against the calibration's cell and 
   CHECK_THAT(w[0].message, Catch::Contains("nor its check extension"));
 }
 
-TEST_CASE("the plan file says what the plan is for; old files are calibration plans") {
+TEST_CASE("the plan file says what the plan is for, and old files are calibration plans") {
   const Plan back = parsePlan(formatPlan(checkPlanOfDefaultCell()), "check.json");
   CHECK(back.purpose == PlanPurpose::kCheck);
   CHECK(back.summary.points == checkPlanOfDefaultCell().summary.points);

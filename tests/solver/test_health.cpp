@@ -197,7 +197,7 @@ TEST_CASE("the reference: a baseline, else the calibration's fit RMS, else the f
   CHECK(std::string(healthReferenceName(fallback.reference)) == "fallback");
 }
 
-TEST_CASE("the thresholds decide the verdict; too few samples cannot pass") {
+TEST_CASE("the thresholds decide the verdict, and too few samples cannot pass") {
   std::mt19937_64 rng(8);
   const Model truth = perturbModel(puma560NominalModel(), PerturbationSigmas{}, rng);
   Model exact = truth;  // the true robot as the active model: the ratio is the noise's
