@@ -78,7 +78,7 @@ struct ParameterChange {
   double prior_sigma = 0;   // the prior's 1-sigma
   double significance = 0;  // |change| / sigma
   double prior_ratio = 0;   // |change| / prior_sigma
-  std::string text;         // "J2.offset +0.050 deg"
+  std::string text;         // "J2.offset +0.0500 deg"
   // Parameters with the same effect on the check's samples (their columns parallel): the data
   // cannot tell this one from them, e.g. L1.z for L0.z, L0.rz for J1.offset.
   std::vector<std::string> equivalent;
@@ -119,7 +119,7 @@ struct HealthVerdict {
 HealthVerdict assessHealth(const Model& active, const std::vector<Sample>& check_samples,
                            const HealthOptions& options = {});
 
-// "J2.offset +0.050 deg", "L3.x +0.210 mm", "J4.gain +0.00050".
+// "J2.offset +0.0500 deg" (4 decimals), "L3.x +0.210 mm" (3), "J4.gain +0.000500" (6).
 std::string parameterChangeText(int index, double change);
 
 }  // namespace robocal
