@@ -4,6 +4,7 @@
 #include <robocal/formats/model_json.hpp>
 #include <robocal/planner/cell_json.hpp>
 #include <robocal/planner/check.hpp>
+#include <robocal/planner/health_plan.hpp>
 #include <robocal/planner/plan_json.hpp>
 
 #include <cstdio>
@@ -19,6 +20,8 @@ the margin, singularity margins, bar-tool angle, table clearance, one arm config
 shell, the ball at each step's latitude and longitude, and the bar's radial deviation within
 via_tolerance_mm along every joint-interpolated move (sampled at sample_step_mm). Prints every
 violation with its shell and step index; exits 1 when there is any, 0 when the plan is safe.
+A health check's plan (robocal plan --check) is checked with the calibration's cell: its shells
+may use the cell's check extension (docs/health-check.md).
 
   --model FILE     robot model (model format)                                  required
   --cell FILE      cell settings (docs/cell-format.md)                         required
@@ -36,9 +39,19 @@ int run(const std::vector<std::string>& argv) {
   const std::string path = args.positional()[0];
   const Plan plan = loadPlanFile(path);
 
-  if (cellToJson(plan.cell) != cellToJson(cell))
-    std::printf("note: %s was made with other settings than %s; checking against the latter\n",
-                path.c_str(), args.required("cell").c_str());
+  // A check plan's settings are the check cell derived from the calibration's (health_plan.hpp).
+  CellConfig expected = cell;
+  if (plan.purpose == PlanPurpose::kCheck) {
+    try {
+      expected = healthCheckCell(cell);
+    } catch (const PlanError&) {
+      // The cell's connections hold no check: the note below says the settings differ.
+    }
+  }
+  if (cellToJson(plan.cell) != cellToJson(expected))
+    std::printf("note: %s was made with other settings than %s%s; checking against the latter\n",
+                path.c_str(), plan.purpose == PlanPurpose::kCheck ? "the check cell of " : "",
+                args.required("cell").c_str());
   std::vector<PlanViolation> violations;
   try {
     violations = checkPlan(model, cell, plan);

@@ -3,6 +3,7 @@
 
 #include <robocal/formats/model_json.hpp>
 #include <robocal/planner/cell_json.hpp>
+#include <robocal/planner/health_plan.hpp>
 #include <robocal/planner/plan.hpp>
 #include <robocal/planner/plan_json.hpp>
 #include <robocal/sim/measurements.hpp>
@@ -14,7 +15,8 @@
 namespace robocal::cli {
 namespace {
 
-constexpr const char* kHelp = R"(usage: robocal plan --model M --cell C [--out plan.json] [options]
+constexpr const char* kHelp =
+    R"(usage: robocal plan --model M --cell C [--out plan.json] [--check] [options]
 
 Plans the ball-bar shells of a cell with the given (nominal) model: data points on each
 connection's shell, tool orientations, and via points that keep the bar within the cell's
@@ -22,14 +24,20 @@ via_tolerance_mm along every joint-interpolated move. Prints a summary per shell
 points, the identification rank and condition number, and the bar deflection forecast for the
 cell's model_uncertainty.
 
+With --check, plans the health check of the calibrated cell instead (docs/health-check.md):
+three connections that use every ball and every chuck, one extension between the cell's, a
+coarse grid; about 10 minutes with the operator's steps. Give the calibrated model in use as
+--model, and the calibration's cell.
+
   --model FILE     robot model (model format)                                  required
   --cell FILE      cell settings (docs/cell-format.md)                         required
-  --out FILE       plan to write (docs/plan-format.md)                         [plan.json]
+  --out FILE       plan to write (docs/plan-format.md)             [plan.json; check.json]
+  --check          the health check's plan (purpose "check")
   --quiet          print only the totals, not each shell and dropped point
 )";
 
 int run(const std::vector<std::string>& argv) {
-  const Args args(argv, {"model", "cell", "out"}, {"help", "quiet"});
+  const Args args(argv, {"model", "cell", "out"}, {"help", "quiet", "check"});
   if (args.flag("help")) {
     std::fputs(kHelp, stdout);
     return 0;
@@ -37,14 +45,17 @@ int run(const std::vector<std::string>& argv) {
   if (!args.positional().empty())
     throw UsageError("unexpected argument '" + args.positional()[0] + "'");
   const Model model = loadModelFile(args.required("model"));
-  const CellConfig cell = loadCellFile(args.required("cell"));
-  const std::string out = args.get("out", "plan.json");
+  const bool check = args.flag("check");
+  const CellConfig calibration_cell = loadCellFile(args.required("cell"));
+  const std::string out = args.get("out", check ? "check.json" : "plan.json");
   const bool quiet = args.flag("quiet");
 
   const auto t0 = std::chrono::steady_clock::now();
   Plan plan;
+  CellConfig cell;
   try {
-    plan = planCell(model, cell);
+    cell = check ? healthCheckCell(calibration_cell) : calibration_cell;
+    plan = check ? planHealthCheck(model, calibration_cell) : planCell(model, cell);
   } catch (const PlanError& e) {
     std::fprintf(stderr, "robocal plan: cannot plan: %s\n", e.what());
     return 1;
@@ -52,9 +63,12 @@ int run(const std::vector<std::string>& argv) {
   const double plan_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
-  summarizeIdentifiability(model, plan);
+  if (!check) summarizeIdentifiability(model, plan);  // planHealthCheck did
 
-  // The forecast: the plan run by robots that differ from the model as the cell assumes.
+  // The forecast: the plan run by robots that differ from the model as the cell assumes. The
+  // cell's uncertainty is that of a nominal model: a check planned with a calibrated model (one
+  // with a provenance) gets none.
+  const bool forecast = !(check && model.provenance);
   const ModelUncertainty& u = cell.uncertainty;
   PerturbationSigmas sigmas;
   sigmas.translation_mm = u.translation_sigma_mm;
@@ -64,8 +78,8 @@ int run(const std::vector<std::string>& argv) {
   std::mt19937_64 rng(static_cast<std::uint64_t>(u.seed));
   std::vector<Model> truths;
   truths.reserve(static_cast<std::size_t>(std::max(0, u.models)));
-  for (int i = 0; i < u.models; ++i) truths.push_back(perturbModel(model, sigmas, rng));
-  predictDeflections(model, truths, plan);
+  for (int i = 0; forecast && i < u.models; ++i) truths.push_back(perturbModel(model, sigmas, rng));
+  if (forecast) predictDeflections(model, truths, plan);
   savePlanFile(out, plan);
 
   if (!quiet) {
@@ -90,10 +104,25 @@ int run(const std::vector<std::string>& argv) {
                     d.lon_deg, d.reason.c_str());
   }
   const PlanSummary& sum = plan.summary;
+  if (check) {
+    std::vector<Connection> connections;
+    for (const ShellPlan& s : plan.shells) connections.push_back(s.connection);
+    std::printf(
+        "check plan: %d points on %d shells (%s), extension %g mm (the calibration's: ", sum.points,
+        sum.shells, connectionList(connections).c_str(), cell.bar.extension_lengths_mm.front());
+    for (size_t i = 0; i < calibration_cell.bar.extension_lengths_mm.size(); ++i)
+      std::printf("%s%g", i ? ", " : "", calibration_cell.bar.extension_lengths_mm[i]);
+    std::printf(
+        " mm); about %.1f min of robot time at %.0f deg/s with %.1f s dwell, plus the operator's "
+        "%d connections: about %.0f min in all\n",
+        sum.duration_s / 60.0, cell.motion.joint_speed_deg_per_s, cell.motion.settle_s, sum.shells,
+        sum.duration_s / 60.0 + sum.shells * kHealthCheckOperatorMinPerShell);
+  }
   std::printf(
-      "plan: %d shells, %d points, %d vias, %d grid points dropped; about %.1f h at %.0f "
+      "plan: %d shells, %d points, %d vias, %d grid points dropped; about %.1f %s at %.0f "
       "deg/s with %.1f s dwell; nominal deviation <= %.3f mm (tolerance %.3f mm)\n",
-      sum.shells, sum.points, sum.vias, sum.dropped, sum.duration_s / 3600.0,
+      sum.shells, sum.points, sum.vias, sum.dropped,
+      check ? sum.duration_s / 60.0 : sum.duration_s / 3600.0, check ? "min" : "h",
       cell.motion.joint_speed_deg_per_s, cell.motion.settle_s, sum.max_deviation_mm,
       cell.motion.via_tolerance_mm);
   std::printf("identification: rank %d of %d, condition number %.3g", plan.summary.rank,
@@ -104,6 +133,11 @@ int run(const std::vector<std::string>& argv) {
                 part.condition_number);
   }
   std::printf("\n");
+  if (!forecast)
+    std::printf(
+        "forecast: none: the cell's model_uncertainty is that of a nominal model, and this check "
+        "is planned with a calibrated one (the daemon's centring keeps the bar in range if the "
+        "robot has changed)\n");
   if (sum.predicted_deflection_mm >= 0)
     std::printf(
         "forecast: with model errors of %.2f mm / %.3f deg (links), %.3f deg (joint "

@@ -1,4 +1,5 @@
 #include <robocal/planner/check.hpp>
+#include <robocal/planner/health_plan.hpp>
 
 #include <robocal/kinematics/units.hpp>
 
@@ -54,9 +55,16 @@ std::vector<PlanViolation> checkPlan(const Model& model, const CellConfig& cell,
     bool known_extension = false;
     for (double e : cell.bar.extension_lengths_mm)
       known_extension |= std::abs(e - shell.extension_mm) < 1e-6;
+    // A check plan is checked against the calibration cell (robocald holds that one) or its own
+    // settings: its extension is the calibration's check extension (health_plan.hpp).
+    if (plan.purpose == PlanPurpose::kCheck)
+      known_extension |= std::abs(healthCheckExtension(cell.bar) - shell.extension_mm) < 1e-6;
     char text[200];
     if (!known_extension) {
-      std::snprintf(text, sizeof text, "extension %.3f mm is not one of the cell's",
+      std::snprintf(text, sizeof text,
+                    plan.purpose == PlanPurpose::kCheck
+                        ? "extension %.3f mm is neither one of the cell's nor its check extension"
+                        : "extension %.3f mm is not one of the cell's",
                     shell.extension_mm);
       add(kShellStep, "extension", text);
     }

@@ -90,6 +90,7 @@ ordered_json planToJson(const Plan& plan) {
   j["format"] = kPlanFormat;
   j["version"] = kPlanFormatVersion;
   j["model"] = plan.model_name;
+  j["purpose"] = planPurposeName(plan.purpose);
   const PlanSummary& s = plan.summary;
   ordered_json summary;
   summary["shells"] = s.shells;
@@ -178,6 +179,14 @@ Plan planFromJson(const json& root, const std::string& source) {
                           (version.is_structured() ? version.type_name() : version.dump()));
   Plan plan;
   if (root.contains("model") && root["model"].is_string()) plan.model_name = root["model"];
+  // Files older than the health check have no purpose: they are calibration plans.
+  if (root.contains("purpose")) {
+    const std::string purpose = r.string(root, "", "purpose");
+    const auto parsed = parsePlanPurpose(purpose);
+    if (!parsed)
+      r.fail("purpose", "expected \"calibration\" or \"check\", got \"" + purpose + "\"");
+    plan.purpose = *parsed;
+  }
   plan.cell = cellFromJson(r.member(root, "", "settings"), source + ": settings");
   const json& shells = r.array(root, "", "shells");
   for (size_t i = 0; i < shells.size(); ++i) {

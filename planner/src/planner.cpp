@@ -744,6 +744,16 @@ ShellPlan ShellPlanner::replanRemaining(const ShellPlan& old, std::size_t next_s
   return shell;
 }
 
+const char* planPurposeName(PlanPurpose purpose) {
+  return purpose == PlanPurpose::kCheck ? "check" : "calibration";
+}
+
+std::optional<PlanPurpose> parsePlanPurpose(const std::string& name) {
+  if (name == "calibration") return PlanPurpose::kCalibration;
+  if (name == "check") return PlanPurpose::kCheck;
+  return std::nullopt;
+}
+
 void summarizePlan(Plan& plan) {
   PlanSummary& s = plan.summary;
   s.shells = static_cast<int>(plan.shells.size());

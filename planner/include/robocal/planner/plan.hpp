@@ -9,6 +9,7 @@
 #include <robocal/planner/puma_ik.hpp>
 
 #include <functional>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -66,8 +67,17 @@ struct PlanSummary {
   double condition_number = 0;          // of the column-scaled Jacobian on its identified part
 };
 
+// What a plan is for: the calibration's data, or the short check that the calibrated model still
+// fits the robot (docs/health-check.md). Plan files without it are calibration plans.
+enum class PlanPurpose { kCalibration, kCheck };
+// "calibration", "check".
+const char* planPurposeName(PlanPurpose purpose);
+// The purpose named `name`, or nullopt.
+std::optional<PlanPurpose> parsePlanPurpose(const std::string& name);
+
 struct Plan {
   std::string model_name;
+  PlanPurpose purpose = PlanPurpose::kCalibration;
   CellConfig cell;  // the settings used
   std::vector<ShellPlan> shells;
   PlanSummary summary;

@@ -1,0 +1,256 @@
+// The health check's plan (planner/health_plan.hpp, docs/health-check.md) and the plan file's
+// purpose.
+#include <catch2/catch.hpp>
+
+#include <robocal/formats/model_json.hpp>
+#include <robocal/kinematics/kinematics.hpp>
+#include <robocal/planner/cell_json.hpp>
+#include <robocal/planner/check.hpp>
+#include <robocal/planner/health_plan.hpp>
+#include <robocal/planner/plan_json.hpp>
+#include <robocal/sim/measurements.hpp>
+#include <robocal/solver/calibrate.hpp>
+#include <robocal/solver/health.hpp>
+
+#include <unistd.h>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <sstream>
+#include <string>
+
+using namespace robocal;
+
+namespace {
+
+const std::string kSource = ROBOCAL_SOURCE_DIR;
+
+const Model& nominal() {
+  static const Model m = loadModelFile(kSource + "/config/puma560.json");
+  return m;
+}
+
+const CellConfig& defaultCell() {
+  static const CellConfig c = loadCellFile(kSource + "/config/cell.json");
+  return c;
+}
+
+const Plan& checkPlanOfDefaultCell() {
+  static const Plan p = planHealthCheck(nominal(), defaultCell());
+  return p;
+}
+
+std::string connectionsOf(const Plan& plan) {
+  std::vector<Connection> c;
+  for (const ShellPlan& s : plan.shells) c.push_back(s.connection);
+  return connectionList(c);
+}
+
+std::string planErrorOf(const std::string& text) {
+  try {
+    parsePlan(text, "plan.json");
+  } catch (const FormatError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+std::string robocalBinary() {
+  if (const char* dir = std::getenv("ROBOCAL_BIN")) return std::string(dir) + "/robocal";
+  return std::string(ROBOCAL_BINARY_DIR) + "/cli/robocal";
+}
+
+std::string tempPath(const std::string& name) {
+  return std::string(ROBOCAL_BINARY_DIR) + "/test_health_plan_" + std::to_string(::getpid()) + "_" +
+         name;
+}
+
+int runCommand(const std::string& command, std::string& output) {
+  const std::string out_path = tempPath("cmd_output.txt");
+  const int status = std::system((command + " > " + out_path + " 2>&1").c_str());
+  std::ifstream in(out_path);
+  std::stringstream text;
+  text << in.rdbuf();
+  output = text.str();
+  std::remove(out_path.c_str());
+  return status;
+}
+
+}  // namespace
+
+TEST_CASE("the check's extension lies between the calibration's, never on one of them") {
+  BarSettings bar;
+  bar.nominal_length_mm = 150;
+  bar.extension_lengths_mm = {0, 150};
+  CHECK(healthCheckExtension(bar) == 75.0);
+  bar.extension_lengths_mm = {150, 0};
+  CHECK(healthCheckExtension(bar) == 75.0);
+  bar.extension_lengths_mm = {0, 50, 150};  // the widest gap, 50 .. 150
+  CHECK(healthCheckExtension(bar) == 100.0);
+  bar.extension_lengths_mm = {0, 75, 150};  // equal gaps: the first
+  CHECK(healthCheckExtension(bar) == 37.5);
+  bar.extension_lengths_mm = {0};  // one extension: half the bar beyond it
+  CHECK(healthCheckExtension(bar) == 75.0);
+  bar.extension_lengths_mm = {100, 100};
+  CHECK(healthCheckExtension(bar) == 175.0);
+}
+
+TEST_CASE("the check's connections use every ball and every chuck, from the cell's own") {
+  CHECK(connectionList(healthCheckConnections(allConnections())) == "B1C2,B2C3,B3C1");
+  CHECK(connectionList(healthCheckConnections(parseConnections("B1C1,B2C2,B3C3"))) ==
+        "B1C1,B2C2,B3C3");
+  // Without B1C2 the other rotation.
+  std::vector<Connection> no_b1c2 = allConnections();
+  no_b1c2.erase(no_b1c2.begin() + 1);
+  CHECK(connectionList(healthCheckConnections(no_b1c2)) == "B1C3,B2C1,B3C2");
+  // Six connections that use every ball and chuck always hold three that do.
+  CHECK(connectionList(healthCheckConnections(parseConnections("B1C1,B1C2,B2C2,B2C3,B3C3,B3C1"))) ==
+        "B1C2,B2C3,B3C1");
+  CHECK_THROWS_AS(healthCheckConnections(parseConnections("B1C1,B1C2,B1C3")), PlanError);
+  CHECK_THROWS_WITH(healthCheckConnections(parseConnections("B1C1,B2C1,B3C1")),
+                    Catch::Contains("B1C1,B2C1,B3C1"));
+}
+
+TEST_CASE("the check cell keeps the calibration's bar, tool, margins and motion") {
+  const CellConfig cell = healthCheckCell(defaultCell());
+  CHECK(connectionList(cell.connections) == "B1C2,B2C3,B3C1");
+  REQUIRE(cell.bar.extension_lengths_mm.size() == 1);
+  CHECK(cell.bar.extension_lengths_mm[0] == 75.0);
+  CHECK(gridLatitudes(cell.grid).size() * gridLongitudes(cell.grid).size() == 24);
+  CHECK(cell.bar.nominal_length_mm == defaultCell().bar.nominal_length_mm);
+  CHECK(cell.motion.settle_s == defaultCell().motion.settle_s);
+  CHECK(cell.margins.table_clearance_mm == defaultCell().margins.table_clearance_mm);
+  CHECK(cell.tool.min_bar_tool_angle_deg == defaultCell().tool.min_bar_tool_angle_deg);
+  CHECK_NOTHROW(validateCell(cell));
+}
+
+TEST_CASE("the check plan: three shells at 75 mm, about 7 minutes of robot time, rank 36") {
+  const Plan& plan = checkPlanOfDefaultCell();
+  CHECK(plan.purpose == PlanPurpose::kCheck);
+  REQUIRE(plan.shells.size() == 3);
+  CHECK(connectionsOf(plan) == "B1C2,B2C3,B3C1");
+  for (const ShellPlan& s : plan.shells) {
+    INFO("shell " << s.shell);
+    CHECK(s.extension_mm == 75.0);
+    CHECK(s.radius_mm == 225.0);
+    CHECK(s.summary.points >= 20);
+  }
+  CHECK(plan.summary.points >= 66);
+  CHECK(plan.summary.points <= 72);
+  // The planner's own estimate; with a minute of the operator's per shell about 10 minutes.
+  const double minutes = plan.summary.duration_s / 60;
+  CHECK(minutes > 6);
+  CHECK(minutes < 8);
+  CHECK(minutes + 3 * kHealthCheckOperatorMinPerShell == Approx(10).margin(1));
+  CHECK(plan.summary.rank == 36);
+}
+
+TEST_CASE("check-plan accepts the check plan against the calibration's cell and its own") {
+  const Plan& plan = checkPlanOfDefaultCell();
+  for (const auto& v : checkPlan(nominal(), defaultCell(), plan)) FAIL(describeViolation(v));
+  for (const auto& v : checkPlan(nominal(), healthCheckCell(defaultCell()), plan))
+    FAIL(describeViolation(v));
+  // A calibration plan may not use the check's extension: only the purpose allows it.
+  Plan as_calibration = plan;
+  as_calibration.purpose = PlanPurpose::kCalibration;
+  const auto v = checkPlan(nominal(), defaultCell(), as_calibration);
+  REQUIRE(v.size() == 3);
+  CHECK(v[0].rule == "extension");
+  // Nor may a check plan use any other extension.
+  Plan other = plan;
+  other.shells[1].extension_mm = 50;
+  other.shells[1].radius_mm = 200;
+  const auto w = checkPlan(nominal(), defaultCell(), other);
+  REQUIRE_FALSE(w.empty());
+  CHECK(w[0].rule == "extension");
+  CHECK_THAT(w[0].message, Catch::Contains("nor its check extension"));
+}
+
+TEST_CASE("the plan file says what the plan is for, and old files are calibration plans") {
+  const Plan back = parsePlan(formatPlan(checkPlanOfDefaultCell()), "check.json");
+  CHECK(back.purpose == PlanPurpose::kCheck);
+  CHECK(back.summary.points == checkPlanOfDefaultCell().summary.points);
+  CHECK(checkPlan(nominal(), defaultCell(), back).empty());
+
+  nlohmann::json j = nlohmann::json::parse(formatPlan(checkPlanOfDefaultCell()));
+  CHECK(j["purpose"] == "check");
+  j.erase("purpose");
+  CHECK(parsePlan(j.dump(), "old.json").purpose == PlanPurpose::kCalibration);
+  j["purpose"] = "calibration";
+  CHECK(parsePlan(j.dump(), "plan.json").purpose == PlanPurpose::kCalibration);
+  j["purpose"] = "verification";
+  CHECK_THAT(planErrorOf(j.dump()), Catch::Contains("purpose") && Catch::Contains("\"check\""));
+  j["purpose"] = 2;
+  CHECK_THAT(planErrorOf(j.dump()), Catch::Contains("purpose"));
+  CHECK(std::string(planPurposeName(PlanPurpose::kCheck)) == "check");
+  CHECK(parsePlanPurpose("calibration") == PlanPurpose::kCalibration);
+  CHECK_FALSE(parsePlanPurpose("Check").has_value());
+}
+
+TEST_CASE("the check plan's own points: an unchanged robot passes, a moved joint 2 fails") {
+  // A calibrated model of a perturbed truth (nine shells at 0 and at 150 mm), then the check
+  // plan's points measured on that truth and on the truth with joint 2's offset moved.
+  const Model& nom = nominal();
+  const Plan& plan = checkPlanOfDefaultCell();
+  std::mt19937_64 rng(5);
+  const Model truth = perturbModel(nom, PerturbationSigmas{}, rng);
+  std::vector<Sample> calibration;
+  int shell = 1;
+  for (double extension : {0.0, 150.0})
+    for (const Connection& c : allConnections()) {
+      ShellRequest req;
+      req.connection = c;
+      req.radius_mm = kDefaultBarMm + extension;
+      req.extension_mm = extension;
+      req.points = 40;
+      req.shell = shell++;
+      const auto poses = shellPoses(nom, req, rng).poses;
+      const auto s = measureShell(truth, req, poses, {0.084, 0}, rng);
+      calibration.insert(calibration.end(), s.begin(), s.end());
+    }
+  const SolveResult fit = solveCalibration(nom, calibration);
+  Model active = withParams(nom, fit.params);
+  active.provenance = ModelProvenance{};
+  active.provenance->rms_mm = fit.after.rms_mm;
+
+  auto checkSamples = [&](const Model& robot) {
+    std::normal_distribution<double> noise(0, 0.084);
+    std::vector<Sample> out = planSamples(robot, plan);
+    for (Sample& s : out) s.length_mm += noise(rng);
+    return out;
+  };
+  const HealthVerdict same = assessHealth(active, checkSamples(truth));
+  CHECK(same.samples == static_cast<size_t>(plan.summary.points));
+  CHECK(same.status == HealthStatus::kPass);
+  CHECK(same.moved.empty());
+  Model moved = truth;
+  moved.joints[1].offset_deg += 0.05;
+  const HealthVerdict changed = assessHealth(active, checkSamples(moved));
+  CHECK(changed.status == HealthStatus::kFail);
+  REQUIRE_FALSE(changed.moved.empty());
+  CHECK(changed.moved[0].name == "J2.offset");
+  CHECK(changed.moved[0].change == Approx(0.05).margin(0.01));
+}
+
+TEST_CASE("robocal plan --check writes the check plan and check-plan accepts it", "[cli]") {
+  const std::string path = tempPath("check.json");
+  std::string out;
+  const std::string args =
+      " --model " + kSource + "/config/puma560.json --cell " + kSource + "/config/cell.json ";
+  const int status =
+      runCommand(robocalBinary() + " plan --check --quiet" + args + "--out " + path, out);
+  INFO(out);
+  REQUIRE(status == 0);
+  CHECK_THAT(out, Catch::Contains("check plan: ") && Catch::Contains("points on 3 shells") &&
+                      Catch::Contains("B1C2,B2C3,B3C1") && Catch::Contains("extension 75 mm") &&
+                      Catch::Contains("min of robot time"));
+  const Plan plan = loadPlanFile(path);
+  CHECK(plan.purpose == PlanPurpose::kCheck);
+  CHECK(plan.shells.size() == 3);
+  CHECK(runCommand(robocalBinary() + " check-plan" + args + path, out) == 0);
+  CHECK_THAT(out, Catch::Contains("OK"));
+  CHECK_THAT(out, !Catch::Contains("other settings"));
+  std::remove(path.c_str());
+}
