@@ -2,10 +2,10 @@
 
 #include <robocal/compensation/accuracy_report.hpp>
 #include <robocal/formats/model_json.hpp>
-#include <robocal/solver/health_report.hpp>
 #include <robocal/formats/report.hpp>
 #include <robocal/formats/samples_csv.hpp>
 #include <robocal/solver/assessment.hpp>
+#include <robocal/solver/health_report.hpp>
 
 #include <spdlog/spdlog.h>
 

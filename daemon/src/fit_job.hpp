@@ -22,10 +22,11 @@ namespace robocal::daemon {
 
 class FitJob {
  public:
-  FitJob(const Model& nominal, const WorkVolume& work_volume, ModelStore& models, RunShared& shared,
-         RunController::Publish publish)
+  FitJob(const Model& nominal, const WorkVolume& work_volume, const HealthOptions& health,
+         ModelStore& models, RunShared& shared, RunController::Publish publish)
       : nominal_(nominal),
         work_volume_(work_volume),
+        health_(health),
         models_(models),
         shared_(shared),
         publish_(std::move(publish)) {}

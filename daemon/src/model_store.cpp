@@ -17,7 +17,6 @@ namespace {
 namespace fs = std::filesystem;
 using json = nlohmann::json;
 
-
 // The versions with a model file, ascending.
 std::vector<int> versionsIn(const std::string& dir) {
   std::vector<int> out;

@@ -12,21 +12,22 @@
 namespace robocal::proto {
 namespace {
 
-constexpr std::array<std::pair<Cmd, const char*>, 15> kCmds = {{{Cmd::kStatus, "status"},
-                                                                {Cmd::kNudge, "nudge"},
-                                                                {Cmd::kWatch, "watch"},
-                                                                {Cmd::kPlan, "plan"},
-                                                                {Cmd::kStart, "start"},
-                                                                {Cmd::kConfirm, "confirm"},
-                                                                {Cmd::kPause, "pause"},
-                                                                {Cmd::kResume, "resume"},
-                                                                {Cmd::kAbort, "abort"},
-                                                                {Cmd::kResult, "result"},
-                                                                {Cmd::kRuns, "runs"},
-                                                                {Cmd::kModels, "models"},
-                                                                {Cmd::kActivate, "activate"},
-                                                                {Cmd::kCompensate, "compensate"},
-                                                                {Cmd::kCheckResult, "check_result"}}};
+constexpr std::array<std::pair<Cmd, const char*>, 15> kCmds = {
+    {{Cmd::kStatus, "status"},
+     {Cmd::kNudge, "nudge"},
+     {Cmd::kWatch, "watch"},
+     {Cmd::kPlan, "plan"},
+     {Cmd::kStart, "start"},
+     {Cmd::kConfirm, "confirm"},
+     {Cmd::kPause, "pause"},
+     {Cmd::kResume, "resume"},
+     {Cmd::kAbort, "abort"},
+     {Cmd::kResult, "result"},
+     {Cmd::kRuns, "runs"},
+     {Cmd::kModels, "models"},
+     {Cmd::kActivate, "activate"},
+     {Cmd::kCompensate, "compensate"},
+     {Cmd::kCheckResult, "check_result"}}};
 
 using json = nlohmann::json;
 

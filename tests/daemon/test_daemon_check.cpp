@@ -40,8 +40,8 @@ proto::ModelEntry summary(const std::string& run) {
 
 // Starts the check, operates it to its end and returns the CHECK it published.
 json runCheck(Cell& cell, proto::Client& c) {
-  const json ack = c.request({{"cmd", "start"}, {"check", true}, {"token", cell.daemon->token()}},
-                             60, "ACK");
+  const json ack =
+      c.request({{"cmd", "start"}, {"check", true}, {"token", cell.daemon->token()}}, 60, "ACK");
   REQUIRE(ack["class"] == "ACK");
   std::vector<json> seen;
   REQUIRE(cell.operate(c, {"done", "paused", "error", "aborted"}, 240, &seen) == "done");
@@ -56,8 +56,9 @@ json runCheck(Cell& cell, proto::Client& c) {
 
 }  // namespace
 
-TEST_CASE("a health check run over cellsim: pass with a model that fits, fail with one that does not",
-          "[e2e]") {
+TEST_CASE(
+    "a health check run over cellsim: pass with a model that fits, fail with one that does not",
+    "[e2e]") {
   Cell cell({"B1C2", "B2C3", "B3C1"}, 21, true, 60);
   const int fits = [&] {
     daemon::ModelStore store(cell.daemon->dataDir());
