@@ -6,7 +6,7 @@
 #include <robocal/formats/model_json.hpp>
 #include <robocal/formats/samples_csv.hpp>
 #include <robocal/solver/health.hpp>
-#include <robocal/solver/health_report.hpp>
+#include <robocal/formats/health_report.hpp>
 
 #include <cstdio>
 #include <nlohmann/json.hpp>

@@ -5,7 +5,7 @@
 #include <robocal/formats/report.hpp>
 #include <robocal/formats/samples_csv.hpp>
 #include <robocal/solver/assessment.hpp>
-#include <robocal/solver/health_report.hpp>
+#include <robocal/formats/health_report.hpp>
 
 #include <spdlog/spdlog.h>
 

@@ -49,6 +49,21 @@ std::string fmt(const char* format, double a, double b, double c, double d) {
   return buf;
 }
 
+nlohmann::ordered_json shellsJson(const ShellTable& table) {
+  nlohmann::ordered_json out = nlohmann::ordered_json::array();
+  for (const ShellResiduals& s : table.shells)
+    out.push_back({{"shell", s.shell},
+                   {"connection", connectionName(s.connection)},
+                   {"extension_mm", s.extension_mm},
+                   {"n", s.stats.count},
+                   {"rms_mm", s.stats.rms_mm},
+                   {"max_abs_mm", s.stats.max_abs_mm},
+                   {"mean_mm", s.stats.mean_mm},
+                   {"rms_to_median", s.rms_to_median},
+                   {"stands_out", s.stands_out}});
+  return out;
+}
+
 }  // namespace report_detail
 
 namespace {
@@ -57,6 +72,7 @@ using ojson = nlohmann::ordered_json;
 using report_detail::escapeXml;
 using report_detail::Figure;
 using report_detail::fmt;
+using report_detail::shellsJson;
 
 // A minimal SVG chart: a plot area with axes, ticks and labels, in data coordinates. Without
 // numeric x ticks, the caller labels the x axis (xLabel).
@@ -261,21 +277,6 @@ ojson names(const std::vector<int>& indices) {
 
 ojson sampleRef(const Sample& s) {
   return {{"file", s.source}, {"line", s.source_line}, {"shell", s.shell}};
-}
-
-ojson shellsJson(const ShellTable& table) {
-  ojson out = ojson::array();
-  for (const ShellResiduals& s : table.shells)
-    out.push_back({{"shell", s.shell},
-                   {"connection", connectionName(s.connection)},
-                   {"extension_mm", s.extension_mm},
-                   {"n", s.stats.count},
-                   {"rms_mm", s.stats.rms_mm},
-                   {"max_abs_mm", s.stats.max_abs_mm},
-                   {"mean_mm", s.stats.mean_mm},
-                   {"rms_to_median", s.rms_to_median},
-                   {"stands_out", s.stands_out}});
-  return out;
 }
 
 ojson worstJson(const ShellTable& table) {

@@ -3,6 +3,7 @@
 
 #include <robocal/solver/assessment.hpp>
 
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -13,6 +14,10 @@ std::string escapeXml(const std::string& text);
 
 // printf of up to four numbers into a string.
 std::string fmt(const char* format, double a, double b = 0, double c = 0, double d = 0);
+
+// The residuals per shell as JSON: shell, connection, extension_mm, n, rms_mm, max_abs_mm,
+// mean_mm, rms_to_median, stands_out (the fit's report and the health check's verdict).
+nlohmann::ordered_json shellsJson(const ShellTable& table);
 
 // A figure the report wrote: its file name in the report folder, a caption, and its SVG text.
 struct Figure {

@@ -2,6 +2,8 @@
 // purpose.
 #include <catch2/catch.hpp>
 
+#include "fixtures.hpp"
+
 #include <robocal/formats/model_json.hpp>
 #include <robocal/kinematics/kinematics.hpp>
 #include <robocal/planner/cell_json.hpp>
@@ -25,17 +27,9 @@ using namespace robocal;
 
 namespace {
 
-const std::string kSource = ROBOCAL_SOURCE_DIR;
-
-const Model& nominal() {
-  static const Model m = loadModelFile(kSource + "/config/puma560.json");
-  return m;
-}
-
-const CellConfig& defaultCell() {
-  static const CellConfig c = loadCellFile(kSource + "/config/cell.json");
-  return c;
-}
+using test::defaultCell;
+using test::kSource;
+using test::nominal;
 
 const Plan& checkPlanOfDefaultCell() {
   static const Plan p = planHealthCheck(nominal(), defaultCell());

@@ -1,5 +1,7 @@
 #include <catch2/catch.hpp>
 
+#include "fixtures.hpp"
+
 #include <robocal/formats/model_json.hpp>
 #include <robocal/formats/samples_csv.hpp>
 #include <robocal/kinematics/puma560.hpp>
@@ -23,17 +25,9 @@ using namespace robocal;
 
 namespace {
 
-const std::string kSource = ROBOCAL_SOURCE_DIR;
-
-const Model& nominal() {
-  static const Model m = loadModelFile(kSource + "/config/puma560.json");
-  return m;
-}
-
-const CellConfig& defaultCell() {
-  static const CellConfig c = loadCellFile(kSource + "/config/cell.json");
-  return c;
-}
+using test::defaultCell;
+using test::kSource;
+using test::nominal;
 
 // The default cell's plan, made once for all the tests that read it.
 const Plan& defaultPlan() {

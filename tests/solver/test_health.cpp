@@ -10,7 +10,7 @@
 #include <robocal/sim/measurements.hpp>
 #include <robocal/solver/calibrate.hpp>
 #include <robocal/solver/health.hpp>
-#include <robocal/solver/health_report.hpp>
+#include <robocal/formats/health_report.hpp>
 
 #include <algorithm>
 #include <cmath>

@@ -7,7 +7,7 @@
 // left, while that is significant; the named ones are refitted together. (A refit of all 54
 // parameters on ~70 samples fits the noise and spreads one change over many correlated
 // parameters: it named a moved joint 1-3 offset in 0 to 6 of 20 seeds.)
-// Plain data, no I/O (health_report.hpp turns a verdict into text and JSON).
+// Plain data, no I/O (formats/health_report.hpp turns a verdict into text and JSON).
 #pragma once
 
 #include <robocal/kinematics/model.hpp>

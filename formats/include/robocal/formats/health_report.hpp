@@ -1,6 +1,5 @@
 // A health verdict (health.hpp) as text and as JSON, the same for `robocal health` and for a
-// client of robocald's check run. A library of its own (robocal_health_report) so that
-// robocal_solver stays free of JSON; its natural home is formats/ next to report.hpp. No I/O.
+// client of robocald's check run, next to the fit's report (report.hpp). No I/O.
 #pragma once
 
 #include <robocal/solver/health.hpp>

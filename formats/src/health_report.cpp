@@ -1,4 +1,6 @@
-#include <robocal/solver/health_report.hpp>
+#include <robocal/formats/health_report.hpp>
+
+#include "report_parts.hpp"
 
 #include <cctype>
 #include <cstdio>
@@ -152,18 +154,7 @@ ordered_json healthVerdictJson(const HealthVerdict& v) {
   ordered_json worst = ordered_json::array();
   for (int k : v.shells.worst) worst.push_back(v.shells.shells[k].shell);
   out["worst_shells"] = worst;
-  ordered_json shells = ordered_json::array();
-  for (const ShellResiduals& s : v.shells.shells)
-    shells.push_back({{"shell", s.shell},
-                      {"connection", connectionName(s.connection)},
-                      {"extension_mm", s.extension_mm},
-                      {"n", s.stats.count},
-                      {"rms_mm", s.stats.rms_mm},
-                      {"max_abs_mm", s.stats.max_abs_mm},
-                      {"mean_mm", s.stats.mean_mm},
-                      {"rms_to_median", s.rms_to_median},
-                      {"stands_out", s.stands_out}});
-  out["shells"] = shells;
+  out["shells"] = report_detail::shellsJson(v.shells);
   return out;
 }
 
