@@ -3,10 +3,10 @@
 // reference, and what moved; the exit status says the verdict.
 #include "args.hpp"
 
+#include <robocal/formats/health_report.hpp>
 #include <robocal/formats/model_json.hpp>
 #include <robocal/formats/samples_csv.hpp>
 #include <robocal/solver/health.hpp>
-#include <robocal/formats/health_report.hpp>
 
 #include <cstdio>
 #include <nlohmann/json.hpp>

@@ -1,11 +1,11 @@
 #include "fit_job.hpp"
 
 #include <robocal/compensation/accuracy_report.hpp>
+#include <robocal/formats/health_report.hpp>
 #include <robocal/formats/model_json.hpp>
 #include <robocal/formats/report.hpp>
 #include <robocal/formats/samples_csv.hpp>
 #include <robocal/solver/assessment.hpp>
-#include <robocal/formats/health_report.hpp>
 
 #include <spdlog/spdlog.h>
 

@@ -5,12 +5,12 @@
 // with a link moved by 0.2 mm.
 #include <catch2/catch.hpp>
 
+#include <robocal/formats/health_report.hpp>
 #include <robocal/kinematics/puma560.hpp>
 #include <robocal/kinematics/units.hpp>
 #include <robocal/sim/measurements.hpp>
 #include <robocal/solver/calibrate.hpp>
 #include <robocal/solver/health.hpp>
-#include <robocal/formats/health_report.hpp>
 
 #include <algorithm>
 #include <cmath>
