@@ -122,7 +122,7 @@ TEST_CASE("many clients: past max_clients new ones are refused, the others are s
   CHECK(clients[0]->request({{"cmd", "status"}})["client_counts"]["refused"] == 3);
 }
 
-TEST_CASE("a client that leaves a request line unfinished is disconnected; the others go on") {
+TEST_CASE("a client that leaves a request line unfinished is disconnected, the others go on") {
   Fixture f;
   auto slow = f.daemon->client();
   auto other = f.daemon->client();

@@ -295,7 +295,7 @@ TEST_CASE("run states: a model error keeps the bar centred by corrective moves a
   CHECK(h.problems().empty());
 }
 
-TEST_CASE("run states: a controller fault pauses the run wherever it comes; resume finishes it",
+TEST_CASE("run states: a controller fault pauses the run wherever it comes, resume finishes it",
           "[daemon][states]") {
   // The first move goes to the connect pose, the next ones nudge nothing and measure.
   for (const int nth : {1, 3, 12, 40}) {

@@ -92,7 +92,7 @@ TEST_CASE("MotionMonitor: arrived, stopped short, timed out", "[drivers][val]") 
   }
 }
 
-TEST_CASE("Ports: libserialport refuses a pty; opens are exclusive", "[drivers][transport]") {
+TEST_CASE("Ports: libserialport refuses a pty, opens are exclusive", "[drivers][transport]") {
   CellSimProcess sim;
   boost::asio::io_context io;
   SECTION("libserialport on a pty") {

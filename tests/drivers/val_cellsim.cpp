@@ -90,7 +90,7 @@ TEST_CASE("VAL II: E-stop during a move, then reset", "[drivers][val]") {
   CHECK(maxDiff(val.moveJoints(target).joints_deg, target) <= 0.006);
 }
 
-TEST_CASE("VAL II: abort stops a slow move; a move that takes too long is a MotionError",
+TEST_CASE("VAL II: abort stops a slow move, a move that takes too long is a MotionError",
           "[drivers][val]") {
   CellSimProcess sim({"--time-scale", "1", "--speed", "10"});
   auto config = sim.driversConfig().val;

@@ -33,7 +33,7 @@ TEST_CASE("samples survive the round trip through CSV") {
   CHECK(out[1].source == "s.csv");
 }
 
-TEST_CASE("sample columns are found by name; extra columns are ignored") {
+TEST_CASE("sample columns are found by name, extra columns are ignored") {
   const std::string text =
       "note,length_mm,j6,j5,j4,j3,j2,j1,lon_deg,lat_deg,extension_mm,chuck,ball,shell\n"
       "hello,200.5,6,5,4,3,2,1,90,45,0,3,2,7\r\n";
