@@ -53,4 +53,9 @@ echo "== the calibrated model against the simulated truth (all samples of the ru
 "$bin" solve --model "$model" "$run_dir/samples.csv" --truth "$out/truth.json" \
   --out "$out/calibrated.json" --report "$out/report"
 echo
+echo "== where the user works: the true robot commanded with nominal and with compensated joints"
+"$bin" accuracy --nominal "$model" --calibrated "$out/calibrated.json" --truth "$out/truth.json" \
+  --cell "$cell" --svg "$out/accuracy.svg"
+echo
 echo "Done. Run folder: $run_dir; calibrated model: $out/calibrated.json; report: $out/report/"
+echo "Corrected joint targets from it: robocal compensate --model $out/calibrated.json --targets FILE --out FILE"
