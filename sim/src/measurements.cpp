@@ -45,6 +45,22 @@ Model perturbModel(const Model& nominal, const PerturbationSigmas& s, std::mt199
   return truth;
 }
 
+std::vector<ShellRequest> shellRequests(const std::vector<Connection>& connections,
+                                        const std::vector<double>& extensions_mm, int points) {
+  std::vector<ShellRequest> out;
+  for (double extension : extensions_mm)
+    for (const Connection& c : connections) {
+      ShellRequest req;
+      req.connection = c;
+      req.radius_mm = kDefaultBarMm + extension;
+      req.extension_mm = extension;
+      req.points = points;
+      req.shell = static_cast<int>(out.size()) + 1;
+      out.push_back(req);
+    }
+  return out;
+}
+
 ShellPoses shellPoses(const Model& model, const ShellRequest& req, std::mt19937_64& rng) {
   const Kinematics kin(model);
   const Eigen::Vector3d chuck = model.chucks_mm[req.connection.chuck_index];

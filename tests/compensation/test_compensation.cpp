@@ -42,19 +42,11 @@ std::vector<JointsDeg> programJoints(int count, unsigned seed) {
 Model calibrate(const Model& nominal, const Model& truth, unsigned seed) {
   std::mt19937_64 rng(seed);
   std::vector<Sample> samples;
-  int shell = 1;
-  for (double extension : {0.0, 150.0})
-    for (const Connection& c : allConnections()) {
-      ShellRequest req;
-      req.connection = c;
-      req.radius_mm = kDefaultBarMm + extension;
-      req.extension_mm = extension;
-      req.points = 40;
-      req.shell = shell++;
-      const auto poses = shellPoses(nominal, req, rng).poses;
-      const auto more = measureShell(truth, req, poses, MeasurementNoise{}, rng);
-      samples.insert(samples.end(), more.begin(), more.end());
-    }
+  for (const ShellRequest& req : shellRequests(allConnections(), {0.0, 150.0}, 40)) {
+    const auto poses = shellPoses(nominal, req, rng).poses;
+    const auto more = measureShell(truth, req, poses, MeasurementNoise{}, rng);
+    samples.insert(samples.end(), more.begin(), more.end());
+  }
   const SolveResult fit = solveCalibration(nominal, samples);
   Model calibrated = withParams(nominal, fit.params);
   calibrated.covariance = fit.covariance;

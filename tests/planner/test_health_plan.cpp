@@ -191,19 +191,11 @@ TEST_CASE("the check plan's own points: an unchanged robot passes, a moved joint
   std::mt19937_64 rng(5);
   const Model truth = perturbModel(nom, PerturbationSigmas{}, rng);
   std::vector<Sample> calibration;
-  int shell = 1;
-  for (double extension : {0.0, 150.0})
-    for (const Connection& c : allConnections()) {
-      ShellRequest req;
-      req.connection = c;
-      req.radius_mm = kDefaultBarMm + extension;
-      req.extension_mm = extension;
-      req.points = 40;
-      req.shell = shell++;
-      const auto poses = shellPoses(nom, req, rng).poses;
-      const auto s = measureShell(truth, req, poses, {0.084, 0}, rng);
-      calibration.insert(calibration.end(), s.begin(), s.end());
-    }
+  for (const ShellRequest& req : shellRequests(allConnections(), {0.0, 150.0}, 40)) {
+    const auto poses = shellPoses(nom, req, rng).poses;
+    const auto s = measureShell(truth, req, poses, {0.084, 0}, rng);
+    calibration.insert(calibration.end(), s.begin(), s.end());
+  }
   const SolveResult fit = solveCalibration(nom, calibration);
   Model active = withParams(nom, fit.params);
   active.provenance = ModelProvenance{};

@@ -21,17 +21,9 @@ Shells planShells(const Model& nominal, const std::string& connections, double e
                   int points, unsigned seed) {
   std::mt19937_64 rng(seed);
   Shells out;
-  int shell = 1;
-  for (const Connection& c : parseConnections(connections)) {
-    ShellRequest req;
-    req.connection = c;
-    req.radius_mm = kDefaultBarMm + extension_mm;
-    req.extension_mm = extension_mm;
-    req.points = points;
-    req.shell = shell++;
+  out.requests = shellRequests(parseConnections(connections), {extension_mm}, points);
+  for (const ShellRequest& req : out.requests)
     out.poses.push_back(shellPoses(nominal, req, rng).poses);
-    out.requests.push_back(req);
-  }
   return out;
 }
 

@@ -35,18 +35,9 @@ Shells shellsOf(const std::string& connections, const std::vector<double>& exten
   const Model nominal = puma560NominalModel();
   std::mt19937_64 rng(seed);
   Shells out;
-  int shell = 1;
-  for (double extension : extensions)
-    for (const Connection& c : parseConnections(connections)) {
-      ShellRequest req;
-      req.connection = c;
-      req.radius_mm = kDefaultBarMm + extension;
-      req.extension_mm = extension;
-      req.points = points;
-      req.shell = shell++;
-      out.poses.push_back(shellPoses(nominal, req, rng).poses);
-      out.requests.push_back(req);
-    }
+  out.requests = shellRequests(parseConnections(connections), extensions, points);
+  for (const ShellRequest& req : out.requests)
+    out.poses.push_back(shellPoses(nominal, req, rng).poses);
   return out;
 }
 

@@ -32,6 +32,11 @@ struct ShellRequest {
   int shell = 1;    // number written to the samples
 };
 
+// One shell per connection and extension, extensions outermost, numbered from 1, each of radius
+// kDefaultBarMm + extension with `points` wanted grid points.
+std::vector<ShellRequest> shellRequests(const std::vector<Connection>& connections,
+                                        const std::vector<double>& extensions_mm, int points);
+
 struct ShellPose {
   double lat_deg = 0, lon_deg = 0;
   JointsDeg joints_deg = JointsDeg::Zero();
