@@ -1,8 +1,10 @@
 // robocal plan: the off-line plan of the ball-bar shells (docs/plan-format.md).
 #include "args.hpp"
 
+#include <robocal/compensation/accuracy.hpp>
 #include <robocal/formats/model_json.hpp>
 #include <robocal/planner/cell_json.hpp>
+#include <robocal/planner/design.hpp>
 #include <robocal/planner/health_plan.hpp>
 #include <robocal/planner/plan.hpp>
 #include <robocal/planner/plan_json.hpp>
@@ -16,7 +18,8 @@ namespace robocal::cli {
 namespace {
 
 constexpr const char* kHelp =
-    R"(usage: robocal plan --model M --cell C [--out plan.json] [--check] [options]
+    R"(usage: robocal plan --model M --cell C [--out plan.json] [--check]
+                    [--time-budget-min M | --points N] [options]
 
 Plans the ball-bar shells of a cell with the given (nominal) model: data points on each
 connection's shell, tool orientations, and via points that keep the bar within the cell's
@@ -29,15 +32,25 @@ three connections that use every ball and every chuck, one extension between the
 coarse grid; about 10 minutes with the operator's steps. Give the calibrated model in use as
 --model, and the calibration's cell.
 
+With --time-budget-min or --points, plans an optimal calibration instead of the cell's grid
+(docs/plan-format.md, "Optimal plans"): points chosen from a dense grid of safe candidates on
+every connection and extension to make the calibrated model most accurate over the cell's
+work_volume, within that much cell time (moves, dwells and the operator's swaps) or that many
+points. Every plan's summary ends with its predicted work-volume error and its cell time.
+
   --model FILE     robot model (model format)                                  required
   --cell FILE      cell settings (docs/cell-format.md)                         required
   --out FILE       plan to write (docs/plan-format.md)             [plan.json; check.json]
   --check          the health check's plan (purpose "check")
+  --time-budget-min M  optimal plan within M minutes of cell time
+  --points N       optimal plan of N points
+  --noise-mm S     the bar's reading noise for the predicted error            [0.084]
   --quiet          print only the totals, not each shell and dropped point
 )";
 
 int run(const std::vector<std::string>& argv) {
-  const Args args(argv, {"model", "cell", "out"}, {"help", "quiet", "check"});
+  const Args args(argv, {"model", "cell", "out", "time-budget-min", "points", "noise-mm"},
+                  {"help", "quiet", "check"});
   if (args.flag("help")) {
     std::fputs(kHelp, stdout);
     return 0;
@@ -49,13 +62,32 @@ int run(const std::vector<std::string>& argv) {
   const CellConfig calibration_cell = loadCellFile(args.required("cell"));
   const std::string out = args.get("out", check ? "check.json" : "plan.json");
   const bool quiet = args.flag("quiet");
+  DesignOptions design;
+  design.budget_s = 60 * args.number("time-budget-min", 0);
+  design.points = static_cast<int>(args.number("points", 0));
+  design.noise_sigma_mm = args.number("noise-mm", design.noise_sigma_mm);
+  if (design.budget_s < 0 || design.points < 0 || design.noise_sigma_mm <= 0)
+    throw UsageError("--time-budget-min and --points must be >= 0, --noise-mm > 0");
+  const bool optimal = design.budget_s > 0 || design.points > 0;
+  if (optimal && check) throw UsageError("--check plans a fixed health check: no budget");
 
   const auto t0 = std::chrono::steady_clock::now();
   Plan plan;
   CellConfig cell;
+  std::vector<JointsDeg> work_joints;
+  DesignReport design_report;
   try {
     cell = check ? healthCheckCell(calibration_cell) : calibration_cell;
-    plan = check ? planHealthCheck(model, calibration_cell) : planCell(model, cell);
+    const Compensator nominal_only(model, model);
+    for (const Eigen::Isometry3d& pose : workVolumePoses(cell.work_volume, nominal_only))
+      work_joints.push_back(nominal_only.forPose(pose).joints_deg);
+    if (optimal)
+      plan = planOptimal(model, cell, work_joints, design, &design_report);
+    else
+      plan = check ? planHealthCheck(model, calibration_cell) : planCell(model, cell);
+  } catch (const std::invalid_argument& e) {  // the work volume is out of reach
+    std::fprintf(stderr, "robocal plan: cannot plan: work_volume: %s\n", e.what());
+    return 1;
   } catch (const PlanError& e) {
     std::fprintf(stderr, "robocal plan: cannot plan: %s\n", e.what());
     return 1;
@@ -63,7 +95,9 @@ int run(const std::vector<std::string>& argv) {
   const double plan_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
-  if (!check) summarizeIdentifiability(model, plan);  // planHealthCheck did
+  if (!check && !optimal) summarizeIdentifiability(model, plan);  // the others did
+  const double predicted_mm =
+      predictedWorkVolumeError(model, plan, work_joints, design.noise_sigma_mm);
 
   // The forecast: the plan run by robots that differ from the model as the cell assumes. The
   // cell's uncertainty is that of a nominal model: a check planned with a calibrated model (one
@@ -154,6 +188,18 @@ int run(const std::vector<std::string>& argv) {
         "warning: with that model error the bar can leave its range: run it with the "
         "model refined as data arrive (the daemon re-plans the rest of each shell), or "
         "calibrate roughly first\n");
+  std::printf(
+      "work volume: predicted RMS tool position error %.4f mm after the fit (bar noise %.3f mm, "
+      "%zu poses); cell time %.1f min: robot %.1f min, %d bar swaps %.1f min\n",
+      predicted_mm, design.noise_sigma_mm, work_joints.size(), sum.cell_time_s / 60.0,
+      sum.duration_s / 60.0, sum.shells, sum.swap_time_s / 60.0);
+  if (optimal)
+    std::printf("optimal: %d points chosen from %d candidates in %d round%s%s\n", sum.points,
+                design_report.candidates, design_report.rounds,
+                design_report.rounds == 1 ? "" : "s",
+                design.budget_s > 0 && sum.cell_time_s > design.budget_s
+                    ? "; OVER THE BUDGET (the fewest points that reach rank 36 take longer)"
+                    : "");
   std::printf("planned in %.2f s; wrote %s\n", plan_s, out.c_str());
   return 0;
 }

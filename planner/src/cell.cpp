@@ -103,6 +103,7 @@ void validateCell(const CellConfig& c) {
   positive("motion.joint_speed_deg_per_s", c.motion.joint_speed_deg_per_s);
   nonNegative("motion.move_overhead_s", c.motion.move_overhead_s);
   nonNegative("motion.settle_s", c.motion.settle_s);
+  nonNegative("motion.swap_s", c.motion.swap_s);
   positive("motion.via_tolerance_mm", c.motion.via_tolerance_mm);
   if (c.motion.via_tolerance_mm >= c.bar.max_deflection_mm)
     bad("motion.via_tolerance_mm", "must be below bar.max_deflection_mm (" +

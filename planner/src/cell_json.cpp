@@ -96,6 +96,7 @@ CellConfig cellFromJson(const json& root, const std::string& source) {
     o.get("joint_speed_deg_per_s", c.motion.joint_speed_deg_per_s);
     o.get("move_overhead_s", c.motion.move_overhead_s);
     o.get("settle_s", c.motion.settle_s);
+    o.get("swap_s", c.motion.swap_s);
     o.get("via_tolerance_mm", c.motion.via_tolerance_mm);
     o.get("sample_step_mm", c.motion.sample_step_mm);
   });
@@ -179,6 +180,7 @@ nlohmann::ordered_json cellToJson(const CellConfig& c) {
   j["motion"] = {{"joint_speed_deg_per_s", c.motion.joint_speed_deg_per_s},
                  {"move_overhead_s", c.motion.move_overhead_s},
                  {"settle_s", c.motion.settle_s},
+                 {"swap_s", c.motion.swap_s},
                  {"via_tolerance_mm", c.motion.via_tolerance_mm},
                  {"sample_step_mm", c.motion.sample_step_mm}};
   j["model_uncertainty"] = {{"translation_sigma_mm", c.uncertainty.translation_sigma_mm},

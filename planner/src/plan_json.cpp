@@ -98,6 +98,8 @@ ordered_json planToJson(const Plan& plan) {
   summary["vias"] = s.vias;
   summary["dropped"] = s.dropped;
   summary["duration_s"] = tidy(s.duration_s);
+  summary["swap_time_s"] = tidy(s.swap_time_s);
+  summary["cell_time_s"] = tidy(s.cell_time_s);
   summary["max_deviation_mm"] = tidy(s.max_deviation_mm);
   if (s.predicted_deflection_mm >= 0) {
     summary["predicted_deflection_mm"] = tidy(s.predicted_deflection_mm);

@@ -59,14 +59,12 @@ Eigen::Vector3d slerp(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double
   return v.normalized();
 }
 
-struct Offset {
-  double yaw, pitch, roll;
-};
+using Offset = ToolOffset;
 
 double offsetDistance(const Offset& a, const Offset& b) {
-  return std::abs(std::remainder(a.yaw - b.yaw, 360.0)) / 45.0 +
-         std::abs(a.pitch - b.pitch) / 20.0 +
-         std::abs(std::remainder(a.roll - b.roll, 360.0)) / 90.0;
+  return std::abs(std::remainder(a.yaw_deg - b.yaw_deg, 360.0)) / 45.0 +
+         std::abs(a.pitch_deg - b.pitch_deg) / 20.0 +
+         std::abs(std::remainder(a.roll_deg - b.roll_deg, 360.0)) / 90.0;
 }
 
 // Tool orientations tried when the policy's own is not safe, nearest first.
@@ -356,7 +354,8 @@ bool ShellPlanner::planArc(const Connection& c, double radius, const ArmConfig& 
     std::vector<std::pair<double, Eigen::Quaterniond>> others;
     for (const Offset& off : candidateOffsets()) {
       const Eigen::Quaterniond r(
-          policyPose(c, radius, mid.lat_deg, mid.lon_deg, off.yaw, off.pitch, off.roll).linear());
+          policyPose(c, radius, mid.lat_deg, mid.lon_deg, off.yaw_deg, off.pitch_deg, off.roll_deg)
+              .linear());
       others.push_back({r.angularDistance(rotations[0]), r});
     }
     std::stable_sort(others.begin(), others.end(),
@@ -414,39 +413,29 @@ void ShellPlanner::finishShell(ShellPlan& shell) const {
   }
 }
 
-ShellPlan ShellPlanner::planShell(const Connection& c, double extension_mm,
-                                  int shell_number) const {
-  ShellPlan shell;
-  shell.shell = shell_number;
-  shell.connection = c;
-  shell.extension_mm = extension_mm;
-  shell.radius_mm = cell_.bar.nominal_length_mm + extension_mm;
-  const double radius = shell.radius_mm;
-  const double tol = cell_.motion.via_tolerance_mm;
+ShellPlanner::PointTry ShellPlanner::tryPoint(const Connection& c, double radius, double lat_deg,
+                                              double lon_deg, const Offset& off,
+                                              const ArmConfig& config) const {
+  PointTry t;
+  t.point = {lat_deg, lon_deg, off, JointsDeg::Zero()};
+  const IkSolution ik =
+      ik_.solve(policyPose(c, radius, lat_deg, lon_deg, off.yaw_deg, off.pitch_deg, off.roll_deg),
+                config, nullptr);
+  if (!ik.ok()) {
+    t.problem = std::string("IK: ") + ikStatusName(ik.status);
+    return t;
+  }
+  t.point.joints_deg = ik.joints_deg;
+  t.problem = poseProblem(c, radius, ik.joints_deg, cell_.motion.via_tolerance_mm);
+  return t;
+}
 
-  std::vector<double> lats = gridLatitudes(cell_.grid);
-  const std::vector<double> lons = gridLongitudes(cell_.grid);
-  if (lats.empty() || lons.empty()) throw PlanError("cell: grid: the grid is empty");
-  // Rings from the one nearest the connect pose.
-  if (std::abs(cell_.connect_lat_deg - lats.back()) < std::abs(cell_.connect_lat_deg - lats[0]))
-    std::reverse(lats.begin(), lats.end());
+ShellPlanner::GridChoice ShellPlanner::chooseConfig(const Connection& c, double radius,
+                                                    const std::vector<double>& lats,
+                                                    const std::vector<double>& lons) const {
   const size_t nlat = lats.size(), nlon = lons.size();
-
-  struct Attempt {
-    IkSolution ik;
-    std::string problem;
-  };
-  auto attempt = [&](double lat, double lon, const Offset& off, const ArmConfig& config,
-                     const JointsDeg* near) {
-    Attempt a;
-    a.ik = ik_.solve(policyPose(c, radius, lat, lon, off.yaw, off.pitch, off.roll), config, near);
-    a.problem = a.ik.ok() ? poseProblem(c, radius, a.ik.joints_deg, tol)
-                          : std::string("IK: ") + ikStatusName(a.ik.status);
-    return a;
-  };
   const std::vector<Offset>& offsets = candidateOffsets();
-
-  // The arm configuration: the policy's own orientations first, then the two best
+  // The policy's own orientations in every configuration first, then the two best
   // configurations with the other orientations too.
   std::vector<int> configs;
   if (cell_.arm_configuration == "auto") {
@@ -459,15 +448,18 @@ ShellPlan ShellPlanner::planShell(const Connection& c, double extension_mm,
   for (int ci : configs)
     for (size_t i = 0; i < nlat; ++i)
       for (size_t k = 0; k < nlon; ++k) {
-        const Attempt a = attempt(lats[i], lons[k], offsets[0], armConfigFromIndex(ci), nullptr);
-        nominal_problem[(ci * nlat + i) * nlon + k] = a.problem;
-        if (a.problem.empty()) ++nominal_count[ci];
+        const PointTry t =
+            tryPoint(c, radius, lats[i], lons[k], offsets[0], armConfigFromIndex(ci));
+        nominal_problem[(ci * nlat + i) * nlon + k] = t.problem;
+        if (t.problem.empty()) ++nominal_count[ci];
       }
   std::stable_sort(configs.begin(), configs.end(),
                    [&](int a, int b) { return nominal_count[a] > nominal_count[b]; });
   if (configs.size() > 2) configs.resize(2);
-  int best = configs[0], best_count = -1;
-  std::vector<char> valid(nlat * nlon, 0);
+  GridChoice out;
+  out.config = configs[0];
+  int best_count = -1;
+  out.valid.assign(nlat * nlon, 0);
   for (int ci : configs) {
     std::vector<char> ok(nlat * nlon, 0);
     int count = 0;
@@ -478,46 +470,78 @@ ShellPlan ShellPlanner::planShell(const Connection& c, double extension_mm,
         } else {
           for (size_t o = 1; o < offsets.size() && !ok[i * nlon + k]; ++o)
             ok[i * nlon + k] =
-                attempt(lats[i], lons[k], offsets[o], armConfigFromIndex(ci), nullptr)
+                tryPoint(c, radius, lats[i], lons[k], offsets[o], armConfigFromIndex(ci))
                     .problem.empty();
         }
         count += ok[i * nlon + k];
       }
     if (count > best_count) {
-      best = ci;
+      out.config = ci;
       best_count = count;
-      valid = ok;
+      out.valid = ok;
     }
   }
-  shell.config = armConfigFromIndex(best);
-  auto reasonFor = [&](size_t i, size_t k) {
-    return nominal_problem[(best * nlat + i) * nlon + k] + " (and with " +
-           std::to_string(offsets.size() - 1) + " other tool orientations)";
-  };
+  out.problem.resize(nlat * nlon);
+  for (size_t n = 0; n < nlat * nlon; ++n)
+    out.problem[n] = nominal_problem[out.config * nlat * nlon + n] + " (and with " +
+                     std::to_string(offsets.size() - 1) + " other tool orientations)";
+  return out;
+}
 
-  // The connect pose: the first safe orientation at the connect latitude and longitude.
-  struct Chosen {
-    double lat, lon;
-    Offset off;
-    JointsDeg q;
-  };
-  std::vector<Chosen> chosen;  // chosen[0] is the connect pose
-  bool found_connect = false;
-  for (const Offset& off : offsets) {
-    const Attempt a =
-        attempt(cell_.connect_lat_deg, cell_.connect_lon_deg, off, shell.config, nullptr);
-    if (a.problem.empty()) {
-      chosen.push_back({cell_.connect_lat_deg, cell_.connect_lon_deg, off, a.ik.joints_deg});
-      found_connect = true;
-      break;
-    }
+std::optional<ShellPoint> ShellPlanner::connectPoint(const Connection& c, double radius,
+                                                     const ArmConfig& config) const {
+  for (const Offset& off : candidateOffsets()) {
+    const PointTry t =
+        tryPoint(c, radius, cell_.connect_lat_deg, cell_.connect_lon_deg, off, config);
+    if (t.problem.empty()) return t.point;
   }
+  return std::nullopt;
+}
+
+ShellCandidates ShellPlanner::candidatePoints(const Connection& c, double extension_mm,
+                                              const GridSettings& grid, int orientations) const {
+  const double radius = cell_.bar.nominal_length_mm + extension_mm;
+  const std::vector<double> lats = gridLatitudes(grid), lons = gridLongitudes(grid);
+  if (lats.empty() || lons.empty()) throw PlanError("cell: grid: the grid is empty");
+  const GridChoice choice = chooseConfig(c, radius, lats, lons);
+  ShellCandidates out;
+  out.config = armConfigFromIndex(choice.config);
+  out.connect = connectPoint(c, radius, out.config);
+  const std::vector<Offset>& offsets = candidateOffsets();
+  for (size_t i = 0; i < lats.size(); ++i)
+    for (size_t k = 0; k < lons.size(); ++k) {
+      if (!choice.valid[i * lons.size() + k]) continue;
+      int found = 0;
+      for (size_t o = 0; o < offsets.size() && found < orientations; ++o) {
+        const PointTry t = tryPoint(c, radius, lats[i], lons[k], offsets[o], out.config);
+        if (!t.problem.empty()) continue;
+        out.points.push_back(t.point);
+        ++found;
+      }
+    }
+  return out;
+}
+
+ShellPlan ShellPlanner::planShell(const Connection& c, double extension_mm,
+                                  int shell_number) const {
+  const double radius = cell_.bar.nominal_length_mm + extension_mm;
+  std::vector<double> lats = gridLatitudes(cell_.grid);
+  const std::vector<double> lons = gridLongitudes(cell_.grid);
+  if (lats.empty() || lons.empty()) throw PlanError("cell: grid: the grid is empty");
+  // Rings from the one nearest the connect pose.
+  if (std::abs(cell_.connect_lat_deg - lats.back()) < std::abs(cell_.connect_lat_deg - lats[0]))
+    std::reverse(lats.begin(), lats.end());
+  const size_t nlat = lats.size(), nlon = lons.size();
+  const std::vector<Offset>& offsets = candidateOffsets();
+  const GridChoice choice = chooseConfig(c, radius, lats, lons);
+  const std::vector<char>& valid = choice.valid;
+  const ArmConfig config = armConfigFromIndex(choice.config);
+  const std::optional<ShellPoint> connect = connectPoint(c, radius, config);
 
   // Travel order: ring by ring; a ring with unreachable points starts after its largest gap so
   // that the path does not cross it; each ring starts near where the previous one ended.
-  Eigen::Vector3d here = chosen.empty()
-                             ? Eigen::Vector3d::UnitZ()
-                             : unitOnSphere(cell_.connect_lat_deg, cell_.connect_lon_deg);
+  Eigen::Vector3d here = connect ? unitOnSphere(cell_.connect_lat_deg, cell_.connect_lon_deg)
+                                 : Eigen::Vector3d::UnitZ();
   std::vector<std::pair<size_t, size_t>> order;
   for (size_t i = 0; i < nlat; ++i) {
     std::vector<size_t> ring;
@@ -558,11 +582,13 @@ ShellPlan ShellPlanner::planShell(const Connection& c, double extension_mm,
   }
 
   // Orientation of each point: the safe one nearest to the previous point's.
-  Offset prev_off = chosen.empty() ? offsets[0] : chosen[0].off;
+  std::vector<DroppedPoint> dropped;
+  std::vector<ShellPoint> points;
+  Offset prev_off = connect ? connect->offset : offsets[0];
   std::vector<size_t> sorted(offsets.size());
   for (const auto& [i, k] : order) {
     if (!valid[i * nlon + k]) {
-      shell.dropped.push_back({lats[i], lons[k], reasonFor(i, k)});
+      dropped.push_back({lats[i], lons[k], choice.problem[i * nlon + k]});
       continue;
     }
     for (size_t o = 0; o < offsets.size(); ++o) sorted[o] = o;
@@ -571,61 +597,80 @@ ShellPlan ShellPlanner::planShell(const Connection& c, double extension_mm,
              offsetDistance(offsets[b], prev_off) + 0.1 * offsetDistance(offsets[b], offsets[0]);
     });
     for (size_t o : sorted) {
-      const Attempt a = attempt(lats[i], lons[k], offsets[o], shell.config, nullptr);
-      if (a.problem.empty()) {
-        chosen.push_back({lats[i], lons[k], offsets[o], a.ik.joints_deg});
+      const PointTry t = tryPoint(c, radius, lats[i], lons[k], offsets[o], config);
+      if (t.problem.empty()) {
+        points.push_back(t.point);
         prev_off = offsets[o];
         break;
       }
     }
   }
+  ShellPlan shell = joinPoints(c, extension_mm, shell_number, config, connect, std::move(points));
+  shell.dropped.insert(shell.dropped.begin(), dropped.begin(), dropped.end());
+  return shell;
+}
+
+ShellPlan ShellPlanner::joinPoints(const Connection& c, double extension_mm, int shell_number,
+                                   const ArmConfig& config,
+                                   const std::optional<ShellPoint>& connect,
+                                   std::vector<ShellPoint> chosen) const {
+  ShellPlan shell;
+  shell.shell = shell_number;
+  shell.connection = c;
+  shell.extension_mm = extension_mm;
+  shell.radius_mm = cell_.bar.nominal_length_mm + extension_mm;
+  shell.config = config;
+  const double radius = shell.radius_mm;
+  const double tol = cell_.motion.via_tolerance_mm;
   if (chosen.empty()) {
     finishShell(shell);
     return shell;
   }
   // Without a safe pose at the connect place, the operator attaches the bar at the first point.
-  if (!found_connect) chosen.insert(chosen.begin(), chosen[0]);
+  chosen.insert(chosen.begin(), connect ? *connect : chosen[0]);
 
   // Joints 4 and 6 turn continuously along the shell; shift the whole sequence by full turns so
   // that it sits inside the limits minus the margin.
   for (int j : {3, 5}) {
     const JointParams& jp = model().joints[j];
     const double period = 360.0 / std::abs(jp.gain);
-    double lo = chosen[0].q[j], hi = lo;
+    double lo = chosen[0].joints_deg[j], hi = lo;
     for (size_t n = 1; n < chosen.size(); ++n) {
-      chosen[n].q[j] =
-          chosen[n - 1].q[j] + std::remainder(chosen[n].q[j] - chosen[n - 1].q[j], period);
-      lo = std::min(lo, chosen[n].q[j]);
-      hi = std::max(hi, chosen[n].q[j]);
+      chosen[n].joints_deg[j] =
+          chosen[n - 1].joints_deg[j] +
+          std::remainder(chosen[n].joints_deg[j] - chosen[n - 1].joints_deg[j], period);
+      lo = std::min(lo, chosen[n].joints_deg[j]);
+      hi = std::max(hi, chosen[n].joints_deg[j]);
     }
     const double m = cell_.margins.joint_limit_deg;
     const double centre = 0.5 * ((jp.min_deg + m - lo) + (jp.max_deg - m - hi));
     const double shift = period * std::round(centre / period);
-    for (Chosen& ch : chosen) ch.q[j] += shift;
+    for (ShellPoint& ch : chosen) ch.joints_deg[j] += shift;
   }
 
   // Vias between consecutive poses.
-  auto poseOf = [&](const Chosen& ch) {
-    return policyPose(c, radius, ch.lat, ch.lon, ch.off.yaw, ch.off.pitch, ch.off.roll);
+  auto poseOf = [&](const ShellPoint& ch) {
+    return policyPose(c, radius, ch.lat_deg, ch.lon_deg, ch.offset.yaw_deg, ch.offset.pitch_deg,
+                      ch.offset.roll_deg);
   };
   Node prev;
   for (size_t n = 0; n < chosen.size(); ++n) {
-    const Chosen& ch = chosen[n];
+    const ShellPoint& ch = chosen[n];
     const Eigen::Isometry3d pose = poseOf(ch);
-    const IkSolution s = ik_.solve(pose, shell.config, &ch.q);
+    const IkSolution s = ik_.solve(pose, shell.config, &ch.joints_deg);
     const std::string problem = s.ok() ? poseProblem(c, radius, s.joints_deg, tol)
                                        : std::string("IK: ") + ikStatusName(s.status);
     if (n == 0) {
       if (!problem.empty()) {  // cannot happen: the connect pose was checked; keep it safe anyway
-        shell.dropped.push_back({ch.lat, ch.lon, "connect pose: " + problem});
+        shell.dropped.push_back({ch.lat_deg, ch.lon_deg, "connect pose: " + problem});
         finishShell(shell);
         return shell;
       }
-      shell.connect = {StepKind::kPoint, s.joints_deg, ch.lat, ch.lon};
-      prev = nodeFor(c, radius, ch.lat, ch.lon, pose, s.joints_deg);
+      shell.connect = {StepKind::kPoint, s.joints_deg, ch.lat_deg, ch.lon_deg};
+      prev = nodeFor(c, radius, ch.lat_deg, ch.lon_deg, pose, s.joints_deg);
       continue;
     }
-    Node node = nodeFor(c, radius, ch.lat, ch.lon, pose, s.joints_deg);
+    Node node = nodeFor(c, radius, ch.lat_deg, ch.lon_deg, pose, s.joints_deg);
     std::vector<PlanStep> vias;
     std::string why = "after turning joints 4 and 6: " + problem;
     bool joined = problem.empty() && planArc(c, radius, shell.config, prev, node, 0, vias,
@@ -635,7 +680,8 @@ ShellPlan ShellPlanner::planShell(const Connection& c, double extension_mm,
       std::vector<std::pair<double, Offset>> others;
       for (const Offset& off : candidateOffsets()) {
         const Eigen::Quaterniond r(
-            policyPose(c, radius, ch.lat, ch.lon, off.yaw, off.pitch, off.roll).linear());
+            policyPose(c, radius, ch.lat_deg, ch.lon_deg, off.yaw_deg, off.pitch_deg, off.roll_deg)
+                .linear());
         others.push_back({r.angularDistance(prev.rotation), off});
       }
       std::stable_sort(others.begin(), others.end(),
@@ -643,10 +689,10 @@ ShellPlan ShellPlanner::planShell(const Connection& c, double extension_mm,
       for (size_t o = 0; o < others.size() && o < 8 && !joined; ++o) {
         const Offset& off = others[o].second;
         const Eigen::Isometry3d alt =
-            policyPose(c, radius, ch.lat, ch.lon, off.yaw, off.pitch, off.roll);
+            policyPose(c, radius, ch.lat_deg, ch.lon_deg, off.yaw_deg, off.pitch_deg, off.roll_deg);
         const IkSolution t = ik_.solve(alt, shell.config, &prev.q);
         if (!t.ok() || !poseProblem(c, radius, t.joints_deg, tol).empty()) continue;
-        node = nodeFor(c, radius, ch.lat, ch.lon, alt, t.joints_deg);
+        node = nodeFor(c, radius, ch.lat_deg, ch.lon_deg, alt, t.joints_deg);
         vias.clear();
         std::string ignored;
         joined = planArc(c, radius, shell.config, prev, node, 0, vias,
@@ -654,11 +700,12 @@ ShellPlan ShellPlanner::planShell(const Connection& c, double extension_mm,
       }
     }
     if (!joined) {
-      shell.dropped.push_back({ch.lat, ch.lon, "no safe path from the previous step: " + why});
+      shell.dropped.push_back(
+          {ch.lat_deg, ch.lon_deg, "no safe path from the previous step: " + why});
       continue;
     }
     shell.steps.insert(shell.steps.end(), vias.begin(), vias.end());
-    shell.steps.push_back({StepKind::kPoint, node.q, ch.lat, ch.lon});
+    shell.steps.push_back({StepKind::kPoint, node.q, ch.lat_deg, ch.lon_deg});
     prev = node;
   }
   finishShell(shell);
@@ -771,6 +818,8 @@ void summarizePlan(Plan& plan) {
         std::max(s.predicted_deflection_mm, shell.summary.predicted_deflection_mm);
     s.predicted_change_mm = std::max(s.predicted_change_mm, shell.summary.predicted_change_mm);
   }
+  s.swap_time_s = s.shells * plan.cell.motion.swap_s;
+  s.cell_time_s = s.duration_s + s.swap_time_s;
 }
 
 Plan planCell(const Model& model, const CellConfig& cell) {

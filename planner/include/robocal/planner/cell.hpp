@@ -50,6 +50,7 @@ struct MotionSettings {
   double joint_speed_deg_per_s = 20;  // speed of the fastest joint on a joint-interpolated move
   double move_overhead_s = 0.5;       // per move: acceleration, settling of the command, polling
   double settle_s = 2.0;              // dwell at each data point before recording
+  double swap_s = 60;                 // the operator's time to move the bar to a new connection
   double via_tolerance_mm = 0.5;      // nominal radial deviation allowed along every segment
   double sample_step_mm = 0.5;        // ball spacing when segments are checked (<= 1 mm)
 };

@@ -35,6 +35,27 @@ struct DroppedPoint {
   std::string reason;
 };
 
+// A tool orientation turned from the policy's (ShellPlanner::policyPose): about the vertical,
+// tilted and rolled about the tool's axis.
+struct ToolOffset {
+  double yaw_deg = 0, pitch_deg = 0, roll_deg = 0;
+};
+
+// A safe data point of a shell: where the ball is on the shell, the tool orientation that
+// reaches it, and the joints (nominal model) there.
+struct ShellPoint {
+  double lat_deg = 0, lon_deg = 0;
+  ToolOffset offset;
+  JointsDeg joints_deg = JointsDeg::Zero();
+};
+
+// The safe data points of a grid on one shell (the optimal design's candidates, design.hpp).
+struct ShellCandidates {
+  ArmConfig config;                   // the configuration that reaches the most grid points
+  std::optional<ShellPoint> connect;  // nullopt: no safe pose at the connect place
+  std::vector<ShellPoint> points;     // up to `orientations` per grid point
+};
+
 struct ShellSummary {
   int points = 0, vias = 0;
   double duration_s = 0;                // moves at the configured speed plus dwells
@@ -59,7 +80,9 @@ struct ShellPlan {
 
 struct PlanSummary {
   int shells = 0, points = 0, vias = 0, dropped = 0;
-  double duration_s = 0;
+  double duration_s = 0;   // robot time: moves and dwells
+  double swap_time_s = 0;  // the operator's bar swaps: motion.swap_s per shell
+  double cell_time_s = 0;  // what the calibration costs the cell: duration_s + swap_time_s
   double max_deviation_mm = 0;
   double predicted_deflection_mm = -1;  // worst over shells; < 0: not computed
   double predicted_change_mm = -1;      // worst over shells; < 0: not computed
@@ -105,6 +128,20 @@ class ShellPlanner {
 
   ShellPlan planShell(const Connection& connection, double extension_mm, int shell_number) const;
 
+  // Every grid point of the shell that is safe in the shell's arm configuration (chosen as
+  // planShell chooses it), with up to `orientations` safe tool orientations each (the policy's
+  // first, then the nearest others).
+  ShellCandidates candidatePoints(const Connection& connection, double extension_mm,
+                                  const GridSettings& grid, int orientations) const;
+
+  // The shell that visits `points` in the given order from `connect` (or from the first point
+  // when there is none): joints 4 and 6 unwrapped into their limits, vias where a move would
+  // take the bar past the tolerance (bisection, so vias sit only where the deviation needs
+  // them). Points that cannot be joined safely are dropped with the reason.
+  ShellPlan joinPoints(const Connection& connection, double extension_mm, int shell_number,
+                       const ArmConfig& config, const std::optional<ShellPoint>& connect,
+                       std::vector<ShellPoint> points) const;
+
   // Re-plans what is left of `shell` for this planner's model (e.g. one refined from the data
   // measured so far): steps[0 .. next_step-1] are kept as they are; the data points from
   // next_step on keep their latitude and longitude, get new joints (numerical refinement seeded
@@ -136,6 +173,21 @@ class ShellPlanner {
 
  private:
   struct Node;
+  struct PointTry {
+    ShellPoint point;
+    std::string problem;  // empty when the point is safe
+  };
+  struct GridChoice {
+    int config = 0;                    // arm configuration index
+    std::vector<char> valid;           // per grid point (lat-major): safe in some orientation
+    std::vector<std::string> problem;  // per grid point: why not, in that configuration
+  };
+  PointTry tryPoint(const Connection& c, double radius, double lat_deg, double lon_deg,
+                    const ToolOffset& offset, const ArmConfig& config) const;
+  GridChoice chooseConfig(const Connection& c, double radius, const std::vector<double>& lats,
+                          const std::vector<double>& lons) const;
+  std::optional<ShellPoint> connectPoint(const Connection& c, double radius,
+                                         const ArmConfig& config) const;
   std::string poseProblem(const Connection& c, double radius, const JointsDeg& q,
                           double tolerance_mm, PoseReport& report) const;
   std::string problemOf(const JointsDeg& q, const PoseReport& report, double tolerance_mm) const;

@@ -1,0 +1,85 @@
+// Optimal plans (docs/plan-format.md, "Optimal plans"): the data points that make the calibrated
+// model most accurate where the user works, for a budget of cell time or of points.
+//
+// The objective is the predicted RMS tool position error over the work volume after the fit:
+// with J the plan's identification Jacobian on the 36 identified parameters (the other 18 fixed,
+// as solveCalibration fixes them) and G_k the tool position's Jacobian at work pose k, the fit's
+// covariance is C = sigma^2 (J^T J)^-1 and the objective is sqrt(trace(C W)), W = mean_k
+// G_k^T G_k. Adding a point j changes it by a rank-one update, so a candidate is scored in
+// O(36^2) without refactoring anything. Math only, no I/O.
+#pragma once
+
+#include <robocal/planner/plan.hpp>
+
+#include <Eigen/Core>
+#include <vector>
+
+namespace robocal {
+
+struct DesignOptions {
+  double budget_s = 0;  // cell time: moves, dwells and the operator's swaps; 0: no limit
+  int points = 0;       // data points; 0: as many as the budget allows
+  GridSettings candidate_grid{5, 85, 5, 0, 15};  // the dense grid the points are chosen from
+  int orientations = 3;                          // tool orientations tried per grid point
+  int exchange_passes = 2;                       // point-exchange passes after the greedy pick
+  double noise_sigma_mm = 0.084;                 // the bar's reading noise (the paper's)
+};
+
+// The work-volume objective for one model: the identified parameters, their column scaling and
+// W. The information matrices it takes are in scaled units, for rows from `row`.
+class WorkVolumeCriterion {
+ public:
+  // `identified`: the parameters the fit estimates (Identifiability::identified).
+  // `work_joints`: the nominal joints of the work volume's poses; `tool_point_mm` in the last
+  // link's frame. Throws std::invalid_argument when work_joints is empty.
+  WorkVolumeCriterion(const Model& model, std::vector<int> identified,
+                      const std::vector<JointsDeg>& work_joints,
+                      const Eigen::Vector3d& tool_point_mm, double noise_sigma_mm);
+
+  int size() const { return static_cast<int>(identified_.size()); }
+  // The scaled, noise-weighted identification row of one bar measurement.
+  Eigen::VectorXd row(const Connection& connection, const JointsDeg& joints) const;
+  const Eigen::MatrixXd& weight() const { return w_; }
+  // sqrt(trace(M^-1 W)) in mm: the predicted RMS tool position error for information M;
+  // infinity when M is singular.
+  double predictedRms(const Eigen::MatrixXd& information) const;
+
+ private:
+  const Model& model_;
+  std::vector<int> identified_;
+  Eigen::VectorXd scale_;  // per identified parameter: 1 / typical |d length / d p|
+  Eigen::MatrixXd w_;
+  double sigma_;
+};
+
+struct DesignReport {
+  int candidates = 0;           // safe candidate points over all shells
+  double predicted_rms_mm = 0;  // of the chosen plan, before the fit
+  double predicted_cell_time_s = 0;
+  int rounds = 0;  // selections made to meet the budget with the real motion
+};
+
+// The identified parameters of a set of plan points (as solveCalibration would choose them).
+std::vector<int> identifiedParameters(const Model& model, const std::vector<Sample>& samples);
+
+// Predicted RMS tool position error over the work volume (mm) of any plan's data points.
+double predictedWorkVolumeError(const Model& model, const Plan& plan,
+                                const std::vector<JointsDeg>& work_joints, double noise_sigma_mm);
+
+// Plans the cell with points chosen for the work volume: candidates on every shell of the
+// cell's connections and extensions (candidate_grid x orientations, all passing the planner's
+// safety rules), a greedy pick by objective gain per second of cell time (a shell's first point
+// pays the operator's swap), exchange passes within shells, shells that do not pay for their
+// swap dropped, each shell's points ordered for short motion, and the pick redone until the
+// plan's real duration fits the budget. Shells that end with no points are left out. Throws
+// PlanError when the options give no plan (no budget and no points; nothing reachable).
+Plan planOptimal(const Model& model, const CellConfig& cell,
+                 const std::vector<JointsDeg>& work_joints, const DesignOptions& options,
+                 DesignReport* report = nullptr);
+
+// Visiting order of points that starts at `start` and keeps the total move time short (nearest
+// neighbour, then 2-opt): indices into `points`.
+std::vector<size_t> shortTour(const ShellPlanner& planner, const JointsDeg& start,
+                              const std::vector<ShellPoint>& points);
+
+}  // namespace robocal

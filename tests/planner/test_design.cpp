@@ -1,0 +1,157 @@
+// Optimal plans (planner/design.hpp): the objective agrees with the fit's own covariance, the
+// optimiser beats a grid of as many points, keeps the budget and every safety rule, and its
+// tours are short.
+#include <catch2/catch.hpp>
+
+#include "fixtures.hpp"
+
+#include <robocal/compensation/accuracy.hpp>
+#include <robocal/kinematics/kinematics.hpp>
+#include <robocal/planner/check.hpp>
+#include <robocal/planner/design.hpp>
+#include <robocal/solver/calibrate.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <random>
+
+using namespace robocal;
+using test::defaultCell;
+using test::nominal;
+
+namespace {
+
+// Three connections that use every ball and chuck, one extension: plans in about a second.
+CellConfig smallCell() {
+  CellConfig cell = defaultCell();
+  cell.connections = parseConnections("B1C2,B2C3,B3C1");
+  cell.bar.extension_lengths_mm = {0, 150};
+  cell.grid.latitude_step_deg = 20;
+  cell.grid.longitude_step_deg = 60;
+  return cell;
+}
+
+DesignOptions smallOptions() {
+  DesignOptions o;
+  o.candidate_grid = {10, 80, 10, 0, 30};
+  o.orientations = 2;
+  return o;
+}
+
+const std::vector<JointsDeg>& workJoints() {
+  static const std::vector<JointsDeg> joints = [] {
+    const Compensator nominal_only(nominal(), nominal());
+    WorkVolume work = defaultCell().work_volume;
+    work.poses = 60;
+    std::vector<JointsDeg> out;
+    for (const Eigen::Isometry3d& pose : workVolumePoses(work, nominal_only))
+      out.push_back(nominal_only.forPose(pose).joints_deg);
+    return out;
+  }();
+  return joints;
+}
+
+}  // namespace
+
+TEST_CASE("the predicted work-volume error is the fit's covariance carried to the tool",
+          "[design]") {
+  const Plan plan = planCell(nominal(), smallCell());
+  constexpr double kSigma = 0.084;
+  const double predicted = predictedWorkVolumeError(nominal(), plan, workJoints(), kSigma);
+  // Noisy lengths of the nominal robot, fitted: the solver's covariance, rescaled from its
+  // estimated sigma to the true one, predicts the same RMS tool error over the same poses.
+  std::vector<Sample> samples = planSamples(nominal(), plan);
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> noise(0, kSigma);
+  for (Sample& s : samples) s.length_mm += noise(rng);
+  const SolveResult fit = solveCalibration(nominal(), samples);
+  REQUIRE(fit.identifiability.rank == 36);
+  const Kinematics kin(fit.params);
+  const Eigen::MatrixXd c = fit.covariance * std::pow(kSigma / fit.sigma_mm, 2);
+  double sum = 0;
+  for (const JointsDeg& q : workJoints()) {
+    PositionJacobian g;
+    kin.ballPositionJacobian(q, Eigen::Vector3d::Zero(), g);
+    sum += (g * c * g.transpose()).trace();
+  }
+  const double from_fit = std::sqrt(sum / workJoints().size());
+  INFO("predicted " << predicted << " mm, from the fit's covariance " << from_fit << " mm");
+  CHECK(predicted == Approx(from_fit).epsilon(0.03));
+  // Halving the noise halves it; a plan with fewer points predicts more error.
+  CHECK(predictedWorkVolumeError(nominal(), plan, workJoints(), kSigma / 2) ==
+        Approx(predicted / 2).epsilon(1e-9));
+  Plan half = plan;
+  half.shells.resize(3);
+  CHECK(predictedWorkVolumeError(nominal(), half, workJoints(), kSigma) > predicted);
+}
+
+TEST_CASE("an optimal plan of N points predicts less error than a grid of as many", "[design]") {
+  const CellConfig cell = smallCell();
+  const Plan grid = planCell(nominal(), cell);
+  DesignOptions options = smallOptions();
+  options.points = grid.summary.points;
+  DesignReport report;
+  const Plan optimal = planOptimal(nominal(), cell, workJoints(), options, &report);
+  const double grid_mm = predictedWorkVolumeError(nominal(), grid, workJoints(), 0.084);
+  INFO("grid " << grid.summary.points << " points: " << grid_mm << " mm; optimal "
+               << optimal.summary.points << " points: " << report.predicted_rms_mm << " mm");
+  CHECK(optimal.summary.points <= options.points);
+  CHECK(optimal.summary.points >= options.points * 9 / 10);  // few dropped when joined
+  CHECK(optimal.summary.rank == 36);
+  CHECK(report.predicted_rms_mm < grid_mm);
+  CHECK(report.predicted_rms_mm ==
+        Approx(predictedWorkVolumeError(nominal(), optimal, workJoints(), 0.084)));
+  CHECK(checkPlan(nominal(), cell, optimal).empty());
+  // The same request plans the same points again.
+  const Plan again = planOptimal(nominal(), cell, workJoints(), options);
+  REQUIRE(again.shells.size() == optimal.shells.size());
+  for (size_t s = 0; s < again.shells.size(); ++s)
+    CHECK(again.shells[s].steps.size() == optimal.shells[s].steps.size());
+}
+
+TEST_CASE("an optimal plan keeps its time budget, swaps included", "[design]") {
+  const CellConfig cell = smallCell();
+  DesignOptions options = smallOptions();
+  options.budget_s = 20 * 60;
+  const Plan plan = planOptimal(nominal(), cell, workJoints(), options);
+  CHECK(plan.summary.cell_time_s <= options.budget_s);
+  CHECK(plan.summary.cell_time_s > 0.6 * options.budget_s);  // and uses most of it
+  CHECK(plan.summary.swap_time_s == Approx(plan.summary.shells * cell.motion.swap_s));
+  CHECK(plan.summary.cell_time_s == Approx(plan.summary.duration_s + plan.summary.swap_time_s));
+  CHECK(plan.summary.rank == 36);
+  CHECK(checkPlan(nominal(), cell, plan).empty());
+  // A longer budget buys a smaller error.
+  options.budget_s = 40 * 60;
+  const Plan longer = planOptimal(nominal(), cell, workJoints(), options);
+  CHECK(predictedWorkVolumeError(nominal(), longer, workJoints(), 0.084) <
+        predictedWorkVolumeError(nominal(), plan, workJoints(), 0.084));
+  CHECK_THROWS_AS(planOptimal(nominal(), cell, workJoints(), smallOptions()), PlanError);
+}
+
+TEST_CASE("a short tour visits every point once and is no longer than the given order",
+          "[design]") {
+  const CellConfig cell = smallCell();
+  const ShellPlanner planner(nominal(), cell);
+  const ShellCandidates cand =
+      planner.candidatePoints(cell.connections[0], 0, smallOptions().candidate_grid, 1);
+  REQUIRE(cand.connect);
+  REQUIRE(cand.points.size() > 10);
+  std::vector<ShellPoint> shuffled = cand.points;
+  std::shuffle(shuffled.begin(), shuffled.end(), std::mt19937(7));
+  auto length = [&](const std::vector<size_t>& order) {
+    double t = 0;
+    JointsDeg here = cand.connect->joints_deg;
+    for (size_t i : order) {
+      t += planner.moveDuration(here, shuffled[i].joints_deg);
+      here = shuffled[i].joints_deg;
+    }
+    return t;
+  };
+  const std::vector<size_t> tour = shortTour(planner, cand.connect->joints_deg, shuffled);
+  std::vector<size_t> sorted = tour, given(shuffled.size());
+  std::sort(sorted.begin(), sorted.end());
+  std::iota(given.begin(), given.end(), 0);
+  CHECK(sorted == given);
+  CHECK(length(tour) < 0.6 * length(given));
+}
