@@ -62,6 +62,43 @@ ResidualStats residualStats(const Eigen::VectorXd& r) {
   return s;
 }
 
+const Identifiability* IdentifiabilityCache::find(const Model& start,
+                                                  const std::vector<Sample>& samples) {
+  if (!valid_ || samples.size() != poses_.size() || toParams(start) != params_) return nullptr;
+  for (int b = 0; b < kBallCount; ++b)
+    if (start.balls_mm[b] != balls_mm_[b]) return nullptr;
+  for (int c = 0; c < kChuckCount; ++c)
+    if (start.chucks_mm[c] != chucks_mm_[c]) return nullptr;
+  for (size_t i = 0; i < samples.size(); ++i) {
+    const Sample& s = samples[i];
+    const Pose& p = poses_[i];
+    if (s.ball_index != p.ball_index || s.chuck_index != p.chuck_index ||
+        s.joints_deg != p.joints_deg)
+      return nullptr;
+  }
+  ++hits_;
+  return &analysis_;
+}
+
+void IdentifiabilityCache::store(const Model& start, const std::vector<Sample>& samples,
+                                 Identifiability analysis) {
+  params_ = toParams(start);
+  balls_mm_ = start.balls_mm;
+  chucks_mm_ = start.chucks_mm;
+  poses_.clear();
+  poses_.reserve(samples.size());
+  for (const Sample& s : samples) poses_.push_back({s.joints_deg, s.ball_index, s.chuck_index});
+  analysis_ = std::move(analysis);
+  valid_ = true;
+  ++misses_;
+}
+
+void IdentifiabilityCache::clear() {
+  valid_ = false;
+  poses_.clear();
+  analysis_ = Identifiability{};
+}
+
 SolveResult solveCalibration(const Model& start, const std::vector<Sample>& samples,
                              const SolveOptions& opt) {
   checkSamples(samples);
@@ -72,33 +109,39 @@ SolveResult solveCalibration(const Model& start, const std::vector<Sample>& samp
   const ParamVector start_params = toParams(start);
   const Eigen::Index rows = m + (prior ? kParamCount : 0);
 
-  // Allocation up front: the Jacobian, residuals and the normal equations are reused.
-  Eigen::MatrixXd jac(rows, kParamCount);
-  Eigen::VectorXd residuals(rows), candidate_residuals(rows);
+  // Allocation up front. The residuals and the Jacobian are evaluated together at every trial
+  // point: from a sensible start nearly every step is accepted, and the accepted trial's
+  // Jacobian is the next step's, so each step costs one pass over the samples, not two.
+  Eigen::MatrixXd jac(rows, kParamCount), trial_jac(rows, kParamCount);
+  Eigen::VectorXd residuals(rows), trial_residuals(rows);
   Eigen::MatrixXd sample_jac;
   Eigen::VectorXd sample_residuals;
-  Eigen::Matrix<double, kParamCount, kParamCount> jtj;
   ParamVector params = start_params;
 
-  // Residuals (and the Jacobian when asked) of the samples, then of the prior rows.
-  auto evaluate = [&](const ParamVector& p, Eigen::VectorXd& r, Eigen::MatrixXd* j) {
+  // Residuals and Jacobian of the samples, then of the prior rows.
+  auto evaluate = [&](const ParamVector& p, Eigen::VectorXd& r, Eigen::MatrixXd& j) {
     if (!prior) {
-      evaluateProblem(start, p, samples, r, j);
+      evaluateProblem(start, p, samples, r, &j);
       return;
     }
-    evaluateProblem(start, p, samples, sample_residuals, j ? &sample_jac : nullptr);
+    evaluateProblem(start, p, samples, sample_residuals, &sample_jac);
     r.head(m) = sample_residuals;
     r.tail(kParamCount) = (start_params - p).cwiseQuotient(*opt.prior_sigma);
-    if (j) {
-      j->topRows(m) = sample_jac;
-      j->bottomRows(kParamCount) = (-opt.prior_sigma->cwiseInverse()).asDiagonal();
-    }
+    j.topRows(m) = sample_jac;
+    j.bottomRows(kParamCount) = (-opt.prior_sigma->cwiseInverse()).asDiagonal();
   };
 
   SolveResult result;
-  evaluate(params, residuals, &jac);
+  evaluate(params, residuals, jac);
   result.before = residualStats(residuals.head(m));
-  result.identifiability = analyzeIdentifiability(prior ? Eigen::MatrixXd(jac.topRows(m)) : jac);
+  // The analysis depends on the start point and the poses only: a cache may hold it.
+  IdentifiabilityCache* cache = opt.identifiability_cache;
+  if (const Identifiability* cached = cache ? cache->find(start, samples) : nullptr) {
+    result.identifiability = *cached;
+  } else {
+    result.identifiability = analyzeIdentifiability(prior ? Eigen::MatrixXd(jac.topRows(m)) : jac);
+    if (cache) cache->store(start, samples, result.identifiability);
+  }
   // With a prior every parameter is estimated; without, the identifiable basis.
   std::vector<int> candidates = result.identifiability.identified;
   if (prior) {
@@ -114,36 +157,47 @@ SolveResult solveCalibration(const Model& start, const std::vector<Sample>& samp
   // Scaled variables x_k = scale_k * p_free[k] give the free Jacobian columns unit norm.
   Eigen::VectorXd scale(r);
   for (Eigen::Index k = 0; k < r; ++k) scale[k] = jac.col(free[k]).norm();
-  Eigen::MatrixXd a(r, r), damped(r, r);
+  Eigen::MatrixXd free_jac(rows, r), a(r, r), damped(r, r);
   Eigen::VectorXd g(r), step(r), x(r);
-  Eigen::LDLT<Eigen::MatrixXd> ldlt(r);
+  Eigen::LDLT<Eigen::MatrixXd> ldlt(r), undamped(r);
 
+  // a = J_s^T J_s and g = J_s^T r on the scaled free columns only (the fixed columns never enter
+  // a step): one symmetric rank-m update of r x r instead of 54 x 54.
   auto normalEquations = [&]() {
-    jtj.setZero();
-    jtj.selfadjointView<Eigen::Lower>().rankUpdate(jac.transpose());
-    const ParamVector jtr = jac.transpose() * residuals;
-    for (Eigen::Index i = 0; i < r; ++i) {
-      g[i] = jtr[free[i]] / scale[i];
-      for (Eigen::Index k = 0; k <= i; ++k)
-        a(i, k) = a(k, i) =
-            jtj(std::max(free[i], free[k]), std::min(free[i], free[k])) / (scale[i] * scale[k]);
-    }
+    for (Eigen::Index k = 0; k < r; ++k) free_jac.col(k) = jac.col(free[k]) / scale[k];
+    a.setZero();
+    a.selfadjointView<Eigen::Lower>().rankUpdate(free_jac.transpose());
+    a.triangularView<Eigen::StrictlyUpper>() = a.transpose();
+    g.noalias() = free_jac.transpose() * residuals;
+    undamped.compute(a);
   };
 
   double cost = 0.5 * residuals.squaredNorm();
   double lambda = opt.initial_lambda, nu = 2.0;
   result.stop = StopReason::kMaxIterations;
   bool have_normal_equations = false;
-  for (result.iterations = 0; result.iterations < opt.max_iterations && r > 0;) {
+  while (r > 0) {
     if (!have_normal_equations) {
       normalEquations();
       have_normal_equations = true;
+      // The most any step can gain, to second order, is the Gauss-Newton step's predicted
+      // decrease 0.5 g^T a^-1 g. When that is below the cost-change tolerance the point is the
+      // minimum: stop without spending a trial evaluation that could only be rejected by
+      // rounding or accepted for nothing.
+      if (undamped.info() == Eigen::Success && undamped.isPositive()) {
+        const double gain = 0.5 * g.dot(undamped.solve(g));
+        if (std::isfinite(gain) && gain >= 0 && gain <= opt.cost_change_tol * cost) {
+          result.stop = StopReason::kCostChange;
+          break;
+        }
+      }
     }
     // g = J_s^T r with unit columns: max |g| / |r| is the largest cosine between r and a column.
     if (g.cwiseAbs().maxCoeff() <= opt.gradient_tol * std::sqrt(2 * cost)) {
       result.stop = StopReason::kGradient;
       break;
     }
+    if (result.iterations >= opt.max_iterations) break;
     damped = a;
     damped.diagonal() += lambda * a.diagonal();
     ldlt.compute(damped);
@@ -153,8 +207,8 @@ SolveResult solveCalibration(const Model& start, const std::vector<Sample>& samp
 
     ParamVector trial = params;
     for (Eigen::Index k = 0; k < r; ++k) trial[free[k]] += step[k] / scale[k];
-    evaluate(trial, candidate_residuals, nullptr);
-    const double trial_cost = 0.5 * candidate_residuals.squaredNorm();
+    evaluate(trial, trial_residuals, trial_jac);
+    const double trial_cost = 0.5 * trial_residuals.squaredNorm();
     const double predicted = -(g.dot(step) + 0.5 * step.dot(a * step));
     const double rho = (cost - trial_cost) / predicted;
 
@@ -164,9 +218,10 @@ SolveResult solveCalibration(const Model& start, const std::vector<Sample>& samp
       const double decrease = cost - trial_cost;
       params = trial;
       cost = trial_cost;
+      residuals.swap(trial_residuals);
+      jac.swap(trial_jac);
       lambda *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3));
       nu = 2.0;
-      evaluate(params, residuals, &jac);
       have_normal_equations = false;
       if (decrease <= opt.cost_change_tol * (cost + decrease)) {
         result.stop = StopReason::kCostChange;
@@ -198,10 +253,11 @@ SolveResult solveCalibration(const Model& start, const std::vector<Sample>& samp
   const Eigen::Index dof = std::max<Eigen::Index>(1, m - (prior ? 0 : r));
   result.sigma_mm = std::sqrt(result.residuals.squaredNorm() / dof);
 
-  // Statistics at the solution, on the scaled free columns.
+  // Statistics at the solution, on the scaled free columns (the normal matrix of the last
+  // accepted point, formed already unless the loop ended right after accepting it).
   result.covariance = Eigen::MatrixXd::Zero(kParamCount, kParamCount);
   if (r > 0) {
-    normalEquations();
+    if (!have_normal_equations) normalEquations();
     // Singular values of the scaled free Jacobian from the eigenvalues of its normal matrix:
     // accurate enough at these condition numbers (~1e3, i.e. 1e6 for A) and far cheaper than
     // another QR and SVD.
@@ -210,7 +266,7 @@ SolveResult solveCalibration(const Model& start, const std::vector<Sample>& samp
     result.o3 = sv[r - 1];
     result.condition_number = sv[r - 1] > 0 ? sv[0] / sv[r - 1] : INFINITY;
     result.o1 = std::exp(sv.array().log().mean()) / std::sqrt(static_cast<double>(rows));
-    const Eigen::MatrixXd inv = a.ldlt().solve(Eigen::MatrixXd::Identity(r, r));
+    const Eigen::MatrixXd inv = undamped.solve(Eigen::MatrixXd::Identity(r, r));
     const double var = result.sigma_mm * result.sigma_mm;
     for (Eigen::Index i = 0; i < r; ++i)
       for (Eigen::Index k = 0; k < r; ++k)
