@@ -109,77 +109,108 @@ SolveResult solveCalibration(const Model& start, const std::vector<Sample>& samp
   const ParamVector start_params = toParams(start);
   const Eigen::Index rows = m + (prior ? kParamCount : 0);
 
-  // Allocation up front. The residuals and the Jacobian are evaluated together at every trial
-  // point: from a sensible start nearly every step is accepted, and the accepted trial's
-  // Jacobian is the next step's, so each step costs one pass over the samples, not two.
-  Eigen::MatrixXd jac(rows, kParamCount), trial_jac(rows, kParamCount);
+  // The residuals and the Jacobian are evaluated together at every trial point: from a sensible
+  // start nearly every step is accepted, and the accepted trial's normal equations are the next
+  // step's, so each step costs one pass over the samples, not two.
   Eigen::VectorXd residuals(rows), trial_residuals(rows);
-  Eigen::MatrixXd sample_jac;
-  Eigen::VectorXd sample_residuals;
   ParamVector params = start_params;
 
-  // Residuals and Jacobian of the samples, then of the prior rows.
-  auto evaluate = [&](const ParamVector& p, Eigen::VectorXd& r, Eigen::MatrixXd& j) {
-    if (!prior) {
-      evaluateProblem(start, p, samples, r, &j);
-      return;
+  // One pass over the samples at p: the residuals, and the unscaled normal equations
+  // n = J_c^T J_c (lower triangle) and b = J_c^T r on the columns `cols`, accumulated over blocks
+  // of samples whose gradients stay in cache. The m x 54 Jacobian is not stored, so the time per
+  // sample does not grow with m; `full` gets it when the identifiability analysis needs it.
+  constexpr Eigen::Index kBlock = 256;
+  Eigen::MatrixXd block;  // one sample's gradient per column
+  ParamRow gradient;
+  auto pass = [&](const ParamVector& p, const std::vector<int>& cols, Eigen::VectorXd& res,
+                  Eigen::MatrixXd& n, Eigen::VectorXd& b, Eigen::MatrixXd* full) {
+    const BarLengthModel model(start, p);
+    const Eigen::Index c = static_cast<Eigen::Index>(cols.size());
+    block.resize(c, kBlock);
+    n.setZero(c, c);
+    b.setZero(c);
+    if (full) full->resize(m, kParamCount);
+    for (Eigen::Index s0 = 0; s0 < m; s0 += kBlock) {
+      const Eigen::Index len = std::min(kBlock, m - s0);
+      for (Eigen::Index i = 0; i < len; ++i) {
+        const Sample& s = samples[static_cast<size_t>(s0 + i)];
+        res[s0 + i] = s.length_mm - model.lengthGradient(s, gradient.data());
+        for (Eigen::Index k = 0; k < c; ++k) block(k, i) = -gradient[cols[k]];
+        if (full) full->row(s0 + i) = -gradient;
+      }
+      n.selfadjointView<Eigen::Lower>().rankUpdate(block.leftCols(len));
+      b.noalias() += block.leftCols(len) * res.segment(s0, len);
     }
-    evaluateProblem(start, p, samples, sample_residuals, &sample_jac);
-    r.head(m) = sample_residuals;
-    r.tail(kParamCount) = (start_params - p).cwiseQuotient(*opt.prior_sigma);
-    j.topRows(m) = sample_jac;
-    j.bottomRows(kParamCount) = (-opt.prior_sigma->cwiseInverse()).asDiagonal();
+    if (prior) {
+      // Prior row i: residual (start_i - p_i) / sigma_i, Jacobian -1 / sigma_i in column i.
+      res.tail(kParamCount) = (start_params - p).cwiseQuotient(*opt.prior_sigma);
+      for (Eigen::Index k = 0; k < c; ++k) {
+        const double w = 1.0 / (*opt.prior_sigma)[cols[k]];
+        n(k, k) += w * w;
+        b[k] -= w * res[m + cols[k]];
+      }
+    }
   };
 
   SolveResult result;
-  evaluate(params, residuals, jac);
-  result.before = residualStats(residuals.head(m));
-  // The analysis depends on the start point and the poses only: a cache may hold it.
+  // At the start all 54 columns: the scales of the free ones and, when the analysis is not
+  // cached, the Jacobian it needs. The analysis depends on the start point and the poses only.
   IdentifiabilityCache* cache = opt.identifiability_cache;
-  if (const Identifiability* cached = cache ? cache->find(start, samples) : nullptr) {
-    result.identifiability = *cached;
-  } else {
-    result.identifiability = analyzeIdentifiability(prior ? Eigen::MatrixXd(jac.topRows(m)) : jac);
-    if (cache) cache->store(start, samples, result.identifiability);
+  const Identifiability* cached = cache ? cache->find(start, samples) : nullptr;
+  std::vector<int> all(kParamCount);
+  std::iota(all.begin(), all.end(), 0);
+  Eigen::MatrixXd n, trial_n;
+  Eigen::VectorXd b, trial_b;
+  {
+    Eigen::MatrixXd start_jac;
+    pass(params, all, residuals, n, b, cached ? nullptr : &start_jac);
+    if (cached) {
+      result.identifiability = *cached;
+    } else {
+      result.identifiability = analyzeIdentifiability(start_jac);
+      if (cache) cache->store(start, samples, result.identifiability);
+    }
   }
+  result.before = residualStats(residuals.head(m));
   // With a prior every parameter is estimated; without, the identifiable basis.
   std::vector<int> candidates = result.identifiability.identified;
-  if (prior) {
-    candidates.resize(kParamCount);
-    std::iota(candidates.begin(), candidates.end(), 0);
-  }
+  if (prior) candidates = all;
   for (int i : candidates)
     if (std::find(opt.fixed.begin(), opt.fixed.end(), i) == opt.fixed.end())
       result.free_params.push_back(i);
   const auto& free = result.free_params;
   const Eigen::Index r = static_cast<Eigen::Index>(free.size());
 
-  // Scaled variables x_k = scale_k * p_free[k] give the free Jacobian columns unit norm.
+  // Scaled variables x_k = scale_k * p_free[k] give the free Jacobian columns (at the start)
+  // unit norm.
   Eigen::VectorXd scale(r);
-  for (Eigen::Index k = 0; k < r; ++k) scale[k] = jac.col(free[k]).norm();
-  Eigen::MatrixXd free_jac(rows, r), a(r, r), damped(r, r);
+  for (Eigen::Index k = 0; k < r; ++k) scale[k] = std::sqrt(n(free[k], free[k]));
+  Eigen::MatrixXd a(r, r), damped(r, r);
   Eigen::VectorXd g(r), step(r), x(r);
   Eigen::LDLT<Eigen::MatrixXd> ldlt(r), undamped(r);
 
-  // a = J_s^T J_s and g = J_s^T r on the scaled free columns only (the fixed columns never enter
-  // a step): one symmetric rank-m update of r x r instead of 54 x 54.
-  auto normalEquations = [&]() {
-    for (Eigen::Index k = 0; k < r; ++k) free_jac.col(k) = jac.col(free[k]) / scale[k];
-    a.setZero();
-    a.selfadjointView<Eigen::Lower>().rankUpdate(free_jac.transpose());
-    a.triangularView<Eigen::StrictlyUpper>() = a.transpose();
-    g.noalias() = free_jac.transpose() * residuals;
+  // a = J_s^T J_s and g = J_s^T r on the scaled free columns from a pass's n and b, whose row and
+  // column `index[k]` belong to free parameter k (the fixed columns never enter a step).
+  std::vector<int> own(static_cast<size_t>(r));
+  std::iota(own.begin(), own.end(), 0);
+  auto setNormalEquations = [&](const Eigen::MatrixXd& nn, const Eigen::VectorXd& bb,
+                                const std::vector<int>& index) {
+    for (Eigen::Index i = 0; i < r; ++i) {
+      g[i] = bb[index[i]] / scale[i];
+      for (Eigen::Index k = 0; k <= i; ++k)
+        a(i, k) = a(k, i) = nn(index[i], index[k]) / (scale[i] * scale[k]);
+    }
     undamped.compute(a);
   };
+  if (r > 0) setNormalEquations(n, b, free);
 
   double cost = 0.5 * residuals.squaredNorm();
   double lambda = opt.initial_lambda, nu = 2.0;
   result.stop = StopReason::kMaxIterations;
-  bool have_normal_equations = false;
+  bool new_point = true;
   while (r > 0) {
-    if (!have_normal_equations) {
-      normalEquations();
-      have_normal_equations = true;
+    if (new_point) {
+      new_point = false;
       // The most any step can gain, to second order, is the Gauss-Newton step's predicted
       // decrease 0.5 g^T a^-1 g. When that is below the cost-change tolerance the point is the
       // minimum: stop without spending a trial evaluation that could only be rejected by
@@ -207,7 +238,7 @@ SolveResult solveCalibration(const Model& start, const std::vector<Sample>& samp
 
     ParamVector trial = params;
     for (Eigen::Index k = 0; k < r; ++k) trial[free[k]] += step[k] / scale[k];
-    evaluate(trial, trial_residuals, trial_jac);
+    pass(trial, free, trial_residuals, trial_n, trial_b, nullptr);
     const double trial_cost = 0.5 * trial_residuals.squaredNorm();
     const double predicted = -(g.dot(step) + 0.5 * step.dot(a * step));
     const double rho = (cost - trial_cost) / predicted;
@@ -219,10 +250,10 @@ SolveResult solveCalibration(const Model& start, const std::vector<Sample>& samp
       params = trial;
       cost = trial_cost;
       residuals.swap(trial_residuals);
-      jac.swap(trial_jac);
+      setNormalEquations(trial_n, trial_b, own);
+      new_point = true;
       lambda *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3));
       nu = 2.0;
-      have_normal_equations = false;
       if (decrease <= opt.cost_change_tol * (cost + decrease)) {
         result.stop = StopReason::kCostChange;
         break;
@@ -254,10 +285,9 @@ SolveResult solveCalibration(const Model& start, const std::vector<Sample>& samp
   result.sigma_mm = std::sqrt(result.residuals.squaredNorm() / dof);
 
   // Statistics at the solution, on the scaled free columns (the normal matrix of the last
-  // accepted point, formed already unless the loop ended right after accepting it).
+  // accepted point).
   result.covariance = Eigen::MatrixXd::Zero(kParamCount, kParamCount);
   if (r > 0) {
-    if (!have_normal_equations) normalEquations();
     // Singular values of the scaled free Jacobian from the eigenvalues of its normal matrix:
     // accurate enough at these condition numbers (~1e3, i.e. 1e6 for A) and far cheaper than
     // another QR and SVD.
