@@ -115,35 +115,29 @@ SolveResult solveCalibration(const Model& start, const std::vector<Sample>& samp
   Eigen::VectorXd residuals(rows), trial_residuals(rows);
   ParamVector params = start_params;
 
-  // One pass over the samples at p: the residuals, and the unscaled normal equations
-  // n = J_c^T J_c (lower triangle) and b = J_c^T r on the columns `cols`, accumulated over blocks
-  // of samples whose gradients stay in cache. The m x 54 Jacobian is not stored, so the time per
-  // sample does not grow with m; `full` gets it when the identifiability analysis needs it.
+  // The unscaled normal equations n = J_c^T J_c (lower triangle) and b = J_c^T r on the columns
+  // `cols`, accumulated over blocks of samples whose Jacobian rows stay in cache; row(i) gives
+  // row i of J (and may compute it, and residual i, on the way). The prior rows are added last.
   constexpr Eigen::Index kBlock = 256;
-  Eigen::MatrixXd block;  // one sample's gradient per column
-  ParamRow gradient;
-  auto pass = [&](const ParamVector& p, const std::vector<int>& cols, Eigen::VectorXd& res,
-                  Eigen::MatrixXd& n, Eigen::VectorXd& b, Eigen::MatrixXd* full) {
-    const BarLengthModel model(start, p);
+  Eigen::MatrixXd block;  // one sample's Jacobian row (the columns `cols`) per column
+  auto accumulate = [&](const std::vector<int>& cols, const Eigen::VectorXd& res,
+                        Eigen::MatrixXd& n, Eigen::VectorXd& b, const auto& row) {
     const Eigen::Index c = static_cast<Eigen::Index>(cols.size());
     block.resize(c, kBlock);
     n.setZero(c, c);
     b.setZero(c);
-    if (full) full->resize(m, kParamCount);
     for (Eigen::Index s0 = 0; s0 < m; s0 += kBlock) {
       const Eigen::Index len = std::min(kBlock, m - s0);
       for (Eigen::Index i = 0; i < len; ++i) {
-        const Sample& s = samples[static_cast<size_t>(s0 + i)];
-        res[s0 + i] = s.length_mm - model.lengthGradient(s, gradient.data());
-        for (Eigen::Index k = 0; k < c; ++k) block(k, i) = -gradient[cols[k]];
-        if (full) full->row(s0 + i) = -gradient;
+        const double* j = row(s0 + i);
+        for (Eigen::Index k = 0; k < c; ++k) block(k, i) = j[cols[k]];
       }
+      if (c == 0) continue;
       n.selfadjointView<Eigen::Lower>().rankUpdate(block.leftCols(len));
       b.noalias() += block.leftCols(len) * res.segment(s0, len);
     }
     if (prior) {
       // Prior row i: residual (start_i - p_i) / sigma_i, Jacobian -1 / sigma_i in column i.
-      res.tail(kParamCount) = (start_params - p).cwiseQuotient(*opt.prior_sigma);
       for (Eigen::Index k = 0; k < c; ++k) {
         const double w = 1.0 / (*opt.prior_sigma)[cols[k]];
         n(k, k) += w * w;
@@ -151,58 +145,79 @@ SolveResult solveCalibration(const Model& start, const std::vector<Sample>& samp
       }
     }
   };
+  // One pass over the samples at p: the residuals and n, b on `cols`. The m x 54 Jacobian is not
+  // stored, so the time per sample does not grow with m; `full` gets it when the identifiability
+  // analysis needs it.
+  ParamRow jac_row;
+  auto pass = [&](const ParamVector& p, const std::vector<int>& cols, Eigen::VectorXd& res,
+                  Eigen::MatrixXd& n, Eigen::VectorXd& b, Eigen::MatrixXd* full) {
+    const BarLengthModel model(start, p);
+    if (full) full->resize(m, kParamCount);
+    if (prior) res.tail(kParamCount) = (start_params - p).cwiseQuotient(*opt.prior_sigma);
+    accumulate(cols, res, n, b, [&](Eigen::Index i) {
+      const Sample& s = samples[static_cast<size_t>(i)];
+      res[i] = s.length_mm - model.lengthGradient(s, jac_row.data());
+      jac_row = -jac_row;  // r = measured - length
+      if (full) full->row(i) = jac_row;
+      return jac_row.data();
+    });
+  };
 
   SolveResult result;
-  // At the start all 54 columns: the scales of the free ones and, when the analysis is not
-  // cached, the Jacobian it needs. The analysis depends on the start point and the poses only.
+  // The analysis depends on the start point and the poses only: a cache may hold it. Without it,
+  // the start pass keeps the Jacobian for the analysis and the normal equations are formed from
+  // it afterwards, in the same blocks and order, so that both ways give the same numbers.
   IdentifiabilityCache* cache = opt.identifiability_cache;
   const Identifiability* cached = cache ? cache->find(start, samples) : nullptr;
-  std::vector<int> all(kParamCount);
-  std::iota(all.begin(), all.end(), 0);
-  Eigen::MatrixXd n, trial_n;
+  Eigen::MatrixXd n, trial_n, start_jac;
   Eigen::VectorXd b, trial_b;
-  {
-    Eigen::MatrixXd start_jac;
-    pass(params, all, residuals, n, b, cached ? nullptr : &start_jac);
-    if (cached) {
-      result.identifiability = *cached;
-    } else {
-      result.identifiability = analyzeIdentifiability(start_jac);
-      if (cache) cache->store(start, samples, result.identifiability);
-    }
+  if (cached) {
+    result.identifiability = *cached;
+  } else {
+    pass(params, {}, residuals, n, b, &start_jac);
+    result.identifiability = analyzeIdentifiability(start_jac);
+    if (cache) cache->store(start, samples, result.identifiability);
   }
-  result.before = residualStats(residuals.head(m));
   // With a prior every parameter is estimated; without, the identifiable basis.
   std::vector<int> candidates = result.identifiability.identified;
-  if (prior) candidates = all;
+  if (prior) {
+    candidates.resize(kParamCount);
+    std::iota(candidates.begin(), candidates.end(), 0);
+  }
   for (int i : candidates)
     if (std::find(opt.fixed.begin(), opt.fixed.end(), i) == opt.fixed.end())
       result.free_params.push_back(i);
   const auto& free = result.free_params;
   const Eigen::Index r = static_cast<Eigen::Index>(free.size());
+  if (cached) {
+    pass(params, free, residuals, n, b, nullptr);
+  } else {
+    accumulate(free, residuals, n, b, [&](Eigen::Index i) {
+      jac_row = start_jac.row(i);
+      return jac_row.data();
+    });
+    start_jac.resize(0, 0);
+  }
+  result.before = residualStats(residuals.head(m));
 
   // Scaled variables x_k = scale_k * p_free[k] give the free Jacobian columns (at the start)
   // unit norm.
   Eigen::VectorXd scale(r);
-  for (Eigen::Index k = 0; k < r; ++k) scale[k] = std::sqrt(n(free[k], free[k]));
+  for (Eigen::Index k = 0; k < r; ++k) scale[k] = std::sqrt(n(k, k));
   Eigen::MatrixXd a(r, r), damped(r, r);
   Eigen::VectorXd g(r), step(r), x(r);
   Eigen::LDLT<Eigen::MatrixXd> ldlt(r), undamped(r);
 
-  // a = J_s^T J_s and g = J_s^T r on the scaled free columns from a pass's n and b, whose row and
-  // column `index[k]` belong to free parameter k (the fixed columns never enter a step).
-  std::vector<int> own(static_cast<size_t>(r));
-  std::iota(own.begin(), own.end(), 0);
-  auto setNormalEquations = [&](const Eigen::MatrixXd& nn, const Eigen::VectorXd& bb,
-                                const std::vector<int>& index) {
+  // a = J_s^T J_s and g = J_s^T r on the scaled free columns from a pass's n and b (the fixed
+  // columns never enter a step).
+  auto setNormalEquations = [&](const Eigen::MatrixXd& nn, const Eigen::VectorXd& bb) {
     for (Eigen::Index i = 0; i < r; ++i) {
-      g[i] = bb[index[i]] / scale[i];
-      for (Eigen::Index k = 0; k <= i; ++k)
-        a(i, k) = a(k, i) = nn(index[i], index[k]) / (scale[i] * scale[k]);
+      g[i] = bb[i] / scale[i];
+      for (Eigen::Index k = 0; k <= i; ++k) a(i, k) = a(k, i) = nn(i, k) / (scale[i] * scale[k]);
     }
     undamped.compute(a);
   };
-  if (r > 0) setNormalEquations(n, b, free);
+  if (r > 0) setNormalEquations(n, b);
 
   double cost = 0.5 * residuals.squaredNorm();
   double lambda = opt.initial_lambda, nu = 2.0;
@@ -250,7 +265,7 @@ SolveResult solveCalibration(const Model& start, const std::vector<Sample>& samp
       params = trial;
       cost = trial_cost;
       residuals.swap(trial_residuals);
-      setNormalEquations(trial_n, trial_b, own);
+      setNormalEquations(trial_n, trial_b);
       new_point = true;
       lambda *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3));
       nu = 2.0;
