@@ -56,10 +56,12 @@ class IdentifiabilityCache {
 
 struct SolveOptions {
   int max_iterations = 100;
-  double cost_change_tol = 1e-12;  // stop when an accepted step lowers the cost by less (relative)
-  double step_tol = 1e-12;         // stop when the scaled step is this small relative to x
-  double gradient_tol = 1e-12;     // stop when max |scaled gradient| / cost is below this
-  double initial_lambda = 1e-6;    // damping, relative to the diagonal of the scaled J^T J
+  // Stop when a step lowers the cost by less than this (relative), or, before a trial, when the
+  // Gauss-Newton step's predicted decrease 0.5 g^T (J^T J)^-1 g is below it: no step can gain more.
+  double cost_change_tol = 1e-12;
+  double step_tol = 1e-12;       // stop when the scaled step is this small relative to x
+  double gradient_tol = 1e-12;   // stop when max |scaled gradient| / cost is below this
+  double initial_lambda = 1e-6;  // damping, relative to the diagonal of the scaled J^T J
   // Parameters to hold fixed in addition to the redundant ones (indices into ParamVector).
   std::vector<int> fixed;
   // A prior: when set (all positive), each parameter also gets the residual
@@ -88,7 +90,7 @@ struct SolveResult {
   ParamVector params;               // the estimate; redundant parameters at their start values
   Identifiability identifiability;  // of the start point: rank, redundant set, singular values
   std::vector<int> free_params;     // the parameters that were estimated (sorted)
-  int iterations = 0;
+  int iterations = 0;               // trial steps evaluated (accepted or rejected)
   StopReason stop = StopReason::kMaxIterations;
   ResidualStats before, after;
   Eigen::VectorXd residuals;  // per sample at the solution, mm
