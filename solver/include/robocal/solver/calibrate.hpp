@@ -26,7 +26,7 @@ namespace robocal {
 // The Jacobian at the start point depends only on the start model's 54 parameters, its balls and
 // chucks, and each sample's joint readings, ball and chuck, not on the measured lengths. A cache
 // passed in SolveOptions reuses the analysis when all of these are exactly the same as in the fit
-// that stored it (refits of the same plan with new lengths, repeated centring refits), and
+// that stored it (refits of the same poses with new lengths), and
 // replaces it otherwise, so a stale analysis is never used. The result is then the same as
 // without the cache. One entry; not thread-safe: one cache per thread of fits.
 class IdentifiabilityCache {
