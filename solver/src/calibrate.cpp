@@ -62,6 +62,43 @@ ResidualStats residualStats(const Eigen::VectorXd& r) {
   return s;
 }
 
+const Identifiability* IdentifiabilityCache::find(const Model& start,
+                                                  const std::vector<Sample>& samples) {
+  if (!valid_ || samples.size() != poses_.size() || toParams(start) != params_) return nullptr;
+  for (int b = 0; b < kBallCount; ++b)
+    if (start.balls_mm[b] != balls_mm_[b]) return nullptr;
+  for (int c = 0; c < kChuckCount; ++c)
+    if (start.chucks_mm[c] != chucks_mm_[c]) return nullptr;
+  for (size_t i = 0; i < samples.size(); ++i) {
+    const Sample& s = samples[i];
+    const Pose& p = poses_[i];
+    if (s.ball_index != p.ball_index || s.chuck_index != p.chuck_index ||
+        s.joints_deg != p.joints_deg)
+      return nullptr;
+  }
+  ++hits_;
+  return &analysis_;
+}
+
+void IdentifiabilityCache::store(const Model& start, const std::vector<Sample>& samples,
+                                 Identifiability analysis) {
+  params_ = toParams(start);
+  balls_mm_ = start.balls_mm;
+  chucks_mm_ = start.chucks_mm;
+  poses_.clear();
+  poses_.reserve(samples.size());
+  for (const Sample& s : samples) poses_.push_back({s.joints_deg, s.ball_index, s.chuck_index});
+  analysis_ = std::move(analysis);
+  valid_ = true;
+  ++misses_;
+}
+
+void IdentifiabilityCache::clear() {
+  valid_ = false;
+  poses_.clear();
+  analysis_ = Identifiability{};
+}
+
 SolveResult solveCalibration(const Model& start, const std::vector<Sample>& samples,
                              const SolveOptions& opt) {
   checkSamples(samples);
@@ -72,33 +109,75 @@ SolveResult solveCalibration(const Model& start, const std::vector<Sample>& samp
   const ParamVector start_params = toParams(start);
   const Eigen::Index rows = m + (prior ? kParamCount : 0);
 
-  // Allocation up front: the Jacobian, residuals and the normal equations are reused.
-  Eigen::MatrixXd jac(rows, kParamCount);
-  Eigen::VectorXd residuals(rows), candidate_residuals(rows);
-  Eigen::MatrixXd sample_jac;
-  Eigen::VectorXd sample_residuals;
-  Eigen::Matrix<double, kParamCount, kParamCount> jtj;
+  // The residuals and the Jacobian are evaluated together at every trial point: from a sensible
+  // start nearly every step is accepted, and the accepted trial's normal equations are the next
+  // step's, so each step costs one pass over the samples, not two.
+  Eigen::VectorXd residuals(rows), trial_residuals(rows);
   ParamVector params = start_params;
 
-  // Residuals (and the Jacobian when asked) of the samples, then of the prior rows.
-  auto evaluate = [&](const ParamVector& p, Eigen::VectorXd& r, Eigen::MatrixXd* j) {
-    if (!prior) {
-      evaluateProblem(start, p, samples, r, j);
-      return;
+  // The unscaled normal equations n = J_c^T J_c (lower triangle) and b = J_c^T r on the columns
+  // `cols`, accumulated over blocks of samples whose Jacobian rows stay in cache; row(i) gives
+  // row i of J (and may compute it, and residual i, on the way). The prior rows are added last.
+  constexpr Eigen::Index kBlock = 256;
+  Eigen::MatrixXd block;  // one sample's Jacobian row (the columns `cols`) per column
+  auto accumulate = [&](const std::vector<int>& cols, const Eigen::VectorXd& res,
+                        Eigen::MatrixXd& n, Eigen::VectorXd& b, const auto& row) {
+    const Eigen::Index c = static_cast<Eigen::Index>(cols.size());
+    block.resize(c, kBlock);
+    n.setZero(c, c);
+    b.setZero(c);
+    for (Eigen::Index s0 = 0; s0 < m; s0 += kBlock) {
+      const Eigen::Index len = std::min(kBlock, m - s0);
+      for (Eigen::Index i = 0; i < len; ++i) {
+        const double* j = row(s0 + i);
+        for (Eigen::Index k = 0; k < c; ++k) block(k, i) = j[cols[k]];
+      }
+      if (c == 0) continue;
+      n.selfadjointView<Eigen::Lower>().rankUpdate(block.leftCols(len));
+      b.noalias() += block.leftCols(len) * res.segment(s0, len);
     }
-    evaluateProblem(start, p, samples, sample_residuals, j ? &sample_jac : nullptr);
-    r.head(m) = sample_residuals;
-    r.tail(kParamCount) = (start_params - p).cwiseQuotient(*opt.prior_sigma);
-    if (j) {
-      j->topRows(m) = sample_jac;
-      j->bottomRows(kParamCount) = (-opt.prior_sigma->cwiseInverse()).asDiagonal();
+    if (prior) {
+      // Prior row i: residual (start_i - p_i) / sigma_i, Jacobian -1 / sigma_i in column i.
+      for (Eigen::Index k = 0; k < c; ++k) {
+        const double w = 1.0 / (*opt.prior_sigma)[cols[k]];
+        n(k, k) += w * w;
+        b[k] -= w * res[m + cols[k]];
+      }
     }
+  };
+  // One pass over the samples at p: the residuals and n, b on `cols`. The m x 54 Jacobian is not
+  // stored, so the time per sample does not grow with m; `full` gets it when the identifiability
+  // analysis needs it.
+  ParamRow jac_row;
+  auto pass = [&](const ParamVector& p, const std::vector<int>& cols, Eigen::VectorXd& res,
+                  Eigen::MatrixXd& n, Eigen::VectorXd& b, Eigen::MatrixXd* full) {
+    const BarLengthModel model(start, p);
+    if (full) full->resize(m, kParamCount);
+    if (prior) res.tail(kParamCount) = (start_params - p).cwiseQuotient(*opt.prior_sigma);
+    accumulate(cols, res, n, b, [&](Eigen::Index i) {
+      const Sample& s = samples[static_cast<size_t>(i)];
+      res[i] = s.length_mm - model.lengthGradient(s, jac_row.data());
+      jac_row = -jac_row;  // r = measured - length
+      if (full) full->row(i) = jac_row;
+      return jac_row.data();
+    });
   };
 
   SolveResult result;
-  evaluate(params, residuals, &jac);
-  result.before = residualStats(residuals.head(m));
-  result.identifiability = analyzeIdentifiability(prior ? Eigen::MatrixXd(jac.topRows(m)) : jac);
+  // The analysis depends on the start point and the poses only: a cache may hold it. Without it,
+  // the start pass keeps the Jacobian for the analysis and the normal equations are formed from
+  // it afterwards, in the same blocks and order, so that both ways give the same numbers.
+  IdentifiabilityCache* cache = opt.identifiability_cache;
+  const Identifiability* cached = cache ? cache->find(start, samples) : nullptr;
+  Eigen::MatrixXd n, trial_n, start_jac;
+  Eigen::VectorXd b, trial_b;
+  if (cached) {
+    result.identifiability = *cached;
+  } else {
+    pass(params, {}, residuals, n, b, &start_jac);
+    result.identifiability = analyzeIdentifiability(start_jac);
+    if (cache) cache->store(start, samples, result.identifiability);
+  }
   // With a prior every parameter is estimated; without, the identifiable basis.
   std::vector<int> candidates = result.identifiability.identified;
   if (prior) {
@@ -110,40 +189,61 @@ SolveResult solveCalibration(const Model& start, const std::vector<Sample>& samp
       result.free_params.push_back(i);
   const auto& free = result.free_params;
   const Eigen::Index r = static_cast<Eigen::Index>(free.size());
+  if (cached) {
+    pass(params, free, residuals, n, b, nullptr);
+  } else {
+    accumulate(free, residuals, n, b, [&](Eigen::Index i) {
+      jac_row = start_jac.row(i);
+      return jac_row.data();
+    });
+    start_jac.resize(0, 0);
+  }
+  result.before = residualStats(residuals.head(m));
 
-  // Scaled variables x_k = scale_k * p_free[k] give the free Jacobian columns unit norm.
+  // Scaled variables x_k = scale_k * p_free[k] give the free Jacobian columns (at the start)
+  // unit norm.
   Eigen::VectorXd scale(r);
-  for (Eigen::Index k = 0; k < r; ++k) scale[k] = jac.col(free[k]).norm();
+  for (Eigen::Index k = 0; k < r; ++k) scale[k] = std::sqrt(n(k, k));
   Eigen::MatrixXd a(r, r), damped(r, r);
   Eigen::VectorXd g(r), step(r), x(r);
-  Eigen::LDLT<Eigen::MatrixXd> ldlt(r);
+  Eigen::LDLT<Eigen::MatrixXd> ldlt(r), undamped(r);
 
-  auto normalEquations = [&]() {
-    jtj.setZero();
-    jtj.selfadjointView<Eigen::Lower>().rankUpdate(jac.transpose());
-    const ParamVector jtr = jac.transpose() * residuals;
+  // a = J_s^T J_s and g = J_s^T r on the scaled free columns from a pass's n and b (the fixed
+  // columns never enter a step).
+  auto setNormalEquations = [&](const Eigen::MatrixXd& nn, const Eigen::VectorXd& bb) {
     for (Eigen::Index i = 0; i < r; ++i) {
-      g[i] = jtr[free[i]] / scale[i];
-      for (Eigen::Index k = 0; k <= i; ++k)
-        a(i, k) = a(k, i) =
-            jtj(std::max(free[i], free[k]), std::min(free[i], free[k])) / (scale[i] * scale[k]);
+      g[i] = bb[i] / scale[i];
+      for (Eigen::Index k = 0; k <= i; ++k) a(i, k) = a(k, i) = nn(i, k) / (scale[i] * scale[k]);
     }
+    undamped.compute(a);
   };
+  if (r > 0) setNormalEquations(n, b);
 
   double cost = 0.5 * residuals.squaredNorm();
   double lambda = opt.initial_lambda, nu = 2.0;
   result.stop = StopReason::kMaxIterations;
-  bool have_normal_equations = false;
-  for (result.iterations = 0; result.iterations < opt.max_iterations && r > 0;) {
-    if (!have_normal_equations) {
-      normalEquations();
-      have_normal_equations = true;
+  bool new_point = true;
+  while (r > 0) {
+    if (new_point) {
+      new_point = false;
+      // The most any step can gain, to second order, is the Gauss-Newton step's predicted
+      // decrease 0.5 g^T a^-1 g. When that is below the cost-change tolerance the point is the
+      // minimum: stop without spending a trial evaluation that could only be rejected by
+      // rounding or accepted for nothing.
+      if (undamped.info() == Eigen::Success && undamped.isPositive()) {
+        const double gain = 0.5 * g.dot(undamped.solve(g));
+        if (std::isfinite(gain) && gain >= 0 && gain <= opt.cost_change_tol * cost) {
+          result.stop = StopReason::kCostChange;
+          break;
+        }
+      }
     }
     // g = J_s^T r with unit columns: max |g| / |r| is the largest cosine between r and a column.
     if (g.cwiseAbs().maxCoeff() <= opt.gradient_tol * std::sqrt(2 * cost)) {
       result.stop = StopReason::kGradient;
       break;
     }
+    if (result.iterations >= opt.max_iterations) break;
     damped = a;
     damped.diagonal() += lambda * a.diagonal();
     ldlt.compute(damped);
@@ -153,8 +253,8 @@ SolveResult solveCalibration(const Model& start, const std::vector<Sample>& samp
 
     ParamVector trial = params;
     for (Eigen::Index k = 0; k < r; ++k) trial[free[k]] += step[k] / scale[k];
-    evaluate(trial, candidate_residuals, nullptr);
-    const double trial_cost = 0.5 * candidate_residuals.squaredNorm();
+    pass(trial, free, trial_residuals, trial_n, trial_b, nullptr);
+    const double trial_cost = 0.5 * trial_residuals.squaredNorm();
     const double predicted = -(g.dot(step) + 0.5 * step.dot(a * step));
     const double rho = (cost - trial_cost) / predicted;
 
@@ -164,10 +264,11 @@ SolveResult solveCalibration(const Model& start, const std::vector<Sample>& samp
       const double decrease = cost - trial_cost;
       params = trial;
       cost = trial_cost;
+      residuals.swap(trial_residuals);
+      setNormalEquations(trial_n, trial_b);
+      new_point = true;
       lambda *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3));
       nu = 2.0;
-      evaluate(params, residuals, &jac);
-      have_normal_equations = false;
       if (decrease <= opt.cost_change_tol * (cost + decrease)) {
         result.stop = StopReason::kCostChange;
         break;
@@ -198,10 +299,10 @@ SolveResult solveCalibration(const Model& start, const std::vector<Sample>& samp
   const Eigen::Index dof = std::max<Eigen::Index>(1, m - (prior ? 0 : r));
   result.sigma_mm = std::sqrt(result.residuals.squaredNorm() / dof);
 
-  // Statistics at the solution, on the scaled free columns.
+  // Statistics at the solution, on the scaled free columns (the normal matrix of the last
+  // accepted point).
   result.covariance = Eigen::MatrixXd::Zero(kParamCount, kParamCount);
   if (r > 0) {
-    normalEquations();
     // Singular values of the scaled free Jacobian from the eigenvalues of its normal matrix:
     // accurate enough at these condition numbers (~1e3, i.e. 1e6 for A) and far cheaper than
     // another QR and SVD.
@@ -210,7 +311,7 @@ SolveResult solveCalibration(const Model& start, const std::vector<Sample>& samp
     result.o3 = sv[r - 1];
     result.condition_number = sv[r - 1] > 0 ? sv[0] / sv[r - 1] : INFINITY;
     result.o1 = std::exp(sv.array().log().mean()) / std::sqrt(static_cast<double>(rows));
-    const Eigen::MatrixXd inv = a.ldlt().solve(Eigen::MatrixXd::Identity(r, r));
+    const Eigen::MatrixXd inv = undamped.solve(Eigen::MatrixXd::Identity(r, r));
     const double var = result.sigma_mm * result.sigma_mm;
     for (Eigen::Index i = 0; i < r; ++i)
       for (Eigen::Index k = 0; k < r; ++k)

@@ -255,3 +255,72 @@ TEST_CASE("the shell table names the worst shells and the one that stands out") 
   for (int k : {0, 1, 3, 4}) CHECK_FALSE(t.shells[k].stands_out);
   CHECK(t.worst == std::vector<int>{2, 4, 3});
 }
+
+TEST_CASE("the identifiability cache gives the uncached result, and only for the same plan") {
+  const Model nominal = puma560NominalModel();
+  const Model truth = perturbed(1.0, 81);
+  const Shells shells = planShells(nominal, "all", 0, 40, 30);
+  const auto samples = measure(truth, shells, 0.084, 31);
+  const SolveResult plain = solveCalibration(nominal, samples);
+
+  IdentifiabilityCache cache;
+  SolveOptions options;
+  options.identifiability_cache = &cache;
+  const auto sameFit = [](const SolveResult& a, const SolveResult& b) {
+    CHECK(a.params == b.params);
+    CHECK(a.free_params == b.free_params);
+    CHECK(a.identifiability.rank == b.identifiability.rank);
+    CHECK(a.identifiability.redundant == b.identifiability.redundant);
+    CHECK(a.identifiability.singular_values == b.identifiability.singular_values);
+    CHECK(a.covariance == b.covariance);
+    CHECK(a.iterations == b.iterations);
+  };
+  const SolveResult first = solveCalibration(nominal, samples, options);
+  CHECK(cache.misses() == 1);
+  CHECK(cache.hits() == 0);
+  sameFit(first, plain);
+  const SolveResult again = solveCalibration(nominal, samples, options);
+  CHECK(cache.hits() == 1);
+  sameFit(again, plain);
+
+  SECTION("new lengths at the same poses reuse the analysis") {
+    const auto remeasured = measure(truth, shells, 0.084, 32);
+    const SolveResult refit = solveCalibration(nominal, remeasured, options);
+    CHECK(cache.hits() == 2);
+    sameFit(refit, solveCalibration(nominal, remeasured));
+  }
+  SECTION("another plan is analysed afresh, not given the stored analysis") {
+    // Two shells identify fewer parameters than nine: a stale analysis would show.
+    const auto other = measure(truth, planShells(nominal, "B1C1,B2C2", 0, 40, 33), 0.0, 34);
+    const SolveResult fresh = solveCalibration(nominal, other);
+    REQUIRE(fresh.identifiability.rank < plain.identifiability.rank);
+    const SolveResult cached = solveCalibration(nominal, other, options);
+    CHECK(cache.hits() == 1);
+    CHECK(cache.misses() == 2);
+    sameFit(cached, fresh);
+  }
+  SECTION("one moved pose, or another start point, is a different plan") {
+    auto moved = samples;
+    moved[7].joints_deg[3] += 1e-9;
+    solveCalibration(nominal, moved, options);
+    CHECK(cache.hits() == 1);
+    CHECK(cache.misses() == 2);
+    Model start = nominal;
+    start.links[2].x_mm += 0.5;
+    sameFit(solveCalibration(start, samples, options), solveCalibration(start, samples));
+    CHECK(cache.hits() == 1);
+    CHECK(cache.misses() == 3);
+    Model other_balls = nominal;
+    other_balls.balls_mm[1].x() += 0.1;
+    solveCalibration(other_balls, samples, options);
+    CHECK(cache.misses() == 4);
+  }
+  SECTION("with a prior the cached analysis is the same as the uncached one") {
+    options.prior_sigma = paramSigmas(1.0, 0.1, 0.1, 1e-3);
+    SolveOptions uncached = options;
+    uncached.identifiability_cache = nullptr;
+    sameFit(solveCalibration(nominal, samples, options),
+            solveCalibration(nominal, samples, uncached));
+    CHECK(cache.hits() == 2);
+  }
+}

@@ -85,3 +85,22 @@ TEST_CASE("triangular factor keeps the singular values") {
   Eigen::JacobiSVD<Eigen::MatrixXd> a(jac), b(r);
   CHECK(a.singularValues().isApprox(b.singularValues(), 1e-9));
 }
+
+TEST_CASE("the analysis' singular values are those of the scaled Jacobian") {
+  for (const char* connections : {"all", "B1C1,B2C2", "B2C1,B2C2,B2C3"}) {
+    const Eigen::MatrixXd jac = shellJacobian(puma560NominalModel(), connections);
+    const Identifiability id = analyzeIdentifiability(jac);
+    Eigen::MatrixXd scaled = jac;
+    for (Eigen::Index c = 0; c < scaled.cols(); ++c) scaled.col(c).normalize();
+    Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(scaled).singularValues();
+    sv /= sv[0];
+    REQUIRE(id.singular_values.size() == sv.size());
+    INFO(connections);
+    // The identifiable ones to 1e-9 relative; the redundant ones are rounding, below 1e-12.
+    for (int i = 0; i < id.rank; ++i) CHECK(id.singular_values[i] == Approx(sv[i]).epsilon(1e-9));
+    for (Eigen::Index i = id.rank; i < sv.size(); ++i) {
+      CHECK(id.singular_values[i] < 1e-12);
+      CHECK(sv[i] < 1e-12);
+    }
+  }
+}

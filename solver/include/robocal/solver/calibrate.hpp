@@ -13,18 +13,55 @@
 #include <robocal/kinematics/sample.hpp>
 #include <robocal/solver/identifiability.hpp>
 
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
 
 namespace robocal {
 
+// The identifiability analysis of a start point and a set of sample poses, kept across fits.
+// solveCalibration analyses the column-scaled Jacobian at the start point (identifiability.hpp),
+// a QR of the m x 54 Jacobian and an SVD: at ~800 samples that is as much work as the whole fit.
+// The Jacobian at the start point depends only on the start model's 54 parameters, its balls and
+// chucks, and each sample's joint readings, ball and chuck, not on the measured lengths. A cache
+// passed in SolveOptions reuses the analysis when all of these are exactly the same as in the fit
+// that stored it (refits of the same poses with new lengths), and
+// replaces it otherwise, so a stale analysis is never used. The result is then the same as
+// without the cache. One entry; not thread-safe: one cache per thread of fits.
+class IdentifiabilityCache {
+ public:
+  // The analysis stored for exactly this start point and these poses (counted as a hit), or null.
+  const Identifiability* find(const Model& start, const std::vector<Sample>& samples);
+  // Replaces the stored analysis (counted as a miss).
+  void store(const Model& start, const std::vector<Sample>& samples, Identifiability analysis);
+  void clear();
+  int hits() const { return hits_; }      // fits that reused the stored analysis
+  int misses() const { return misses_; }  // fits that had to analyse (and stored the result)
+
+ private:
+  struct Pose {
+    JointsDeg joints_deg;
+    int ball_index = 0, chuck_index = 0;
+  };
+  bool valid_ = false;
+  ParamVector params_ = ParamVector::Zero();
+  std::array<Eigen::Vector3d, kBallCount> balls_mm_{};
+  std::array<Eigen::Vector3d, kChuckCount> chucks_mm_{};
+  std::vector<Pose> poses_;
+  Identifiability analysis_;
+  int hits_ = 0;
+  int misses_ = 0;
+};
+
 struct SolveOptions {
   int max_iterations = 100;
-  double cost_change_tol = 1e-12;  // stop when an accepted step lowers the cost by less (relative)
-  double step_tol = 1e-12;         // stop when the scaled step is this small relative to x
-  double gradient_tol = 1e-12;     // stop when max |scaled gradient| / cost is below this
-  double initial_lambda = 1e-6;    // damping, relative to the diagonal of the scaled J^T J
+  // Stop when a step lowers the cost by less than this (relative), or, before a trial, when the
+  // Gauss-Newton step's predicted decrease 0.5 g^T (J^T J)^-1 g is below it: no step can gain more.
+  double cost_change_tol = 1e-12;
+  double step_tol = 1e-12;       // stop when the scaled step is this small relative to x
+  double gradient_tol = 1e-12;   // stop when max |scaled gradient| / cost is below this
+  double initial_lambda = 1e-6;  // damping, relative to the diagonal of the scaled J^T J
   // Parameters to hold fixed in addition to the redundant ones (indices into ParamVector).
   std::vector<int> fixed;
   // A prior: when set (all positive), each parameter also gets the residual
@@ -32,6 +69,10 @@ struct SolveOptions {
   // where the data say little. For fits of a few samples (keeping the bar centred while a shell
   // runs); the covariance then includes the prior.
   std::optional<ParamVector> prior_sigma;
+  // When set, the identifiability analysis is taken from this cache if it holds the analysis of
+  // the same start point and poses, and stored in it otherwise (IdentifiabilityCache above). Not
+  // owned; must outlive the call.
+  IdentifiabilityCache* identifiability_cache = nullptr;
 };
 
 enum class StopReason { kCostChange, kStepSize, kGradient, kMaxIterations, kNoProgress };
@@ -49,7 +90,7 @@ struct SolveResult {
   ParamVector params;               // the estimate; redundant parameters at their start values
   Identifiability identifiability;  // of the start point: rank, redundant set, singular values
   std::vector<int> free_params;     // the parameters that were estimated (sorted)
-  int iterations = 0;
+  int iterations = 0;               // trial steps evaluated (accepted or rejected)
   StopReason stop = StopReason::kMaxIterations;
   ResidualStats before, after;
   Eigen::VectorXd residuals;  // per sample at the solution, mm

@@ -6,9 +6,39 @@
 #include <robocal/kinematics/sample.hpp>
 
 #include <Eigen/Core>
+#include <array>
 #include <vector>
 
 namespace robocal {
+
+// The bar-length model at one parameter point, for evaluating samples one at a time: the same
+// values as Kinematics::barLength and barLengthGradient (to rounding), computed for this one use.
+// The per-link constants are made once; per sample, each joint rotation turns two columns of the
+// frame by (cos, sin) instead of a general 4x4 product, and the gradient is taken as
+// u . (axis x lever) = axis . (lever x u) from the frames of the forward pass, without the
+// 3 x 54 position Jacobian. evaluateProblem uses it; the benchmark gives it to Ceres too.
+class BarLengthModel {
+ public:
+  BarLengthModel(const Model& fixtures, const ParamVector& params);
+  // Distance between the sample's ball and chuck centres (mm) at the sample's joint readings.
+  double length(const Sample& sample) const;
+  // The same length, and its gradient with respect to the 54 parameters in `gradient`.
+  double lengthGradient(const Sample& sample, double* gradient) const;
+
+ private:
+  template <bool kGradient>
+  double evaluate(const Sample& sample, double* gradient) const;
+  struct Link {
+    Eigen::Matrix3d rotation;  // Rz * Ry * Rx
+    Eigen::Vector3d translation;
+    Eigen::Vector3d ry_axis;  // axis of the link's ry in its frame before the rotation: Rz e_y
+    Eigen::Vector3d rx_axis;  // axis of its rx: Rz Ry e_x
+  };
+  std::array<Link, kLinkCount> links_;
+  std::array<double, kJointCount> offset_rad_{}, gain_{};
+  std::array<Eigen::Vector3d, kBallCount> balls_mm_;
+  std::array<Eigen::Vector3d, kChuckCount> chucks_mm_;
+};
 
 // Fills residuals (n) and, when jacobian is not null, the n x 54 Jacobian. The balls and chucks
 // come from `fixtures`; the 54 parameters from `params`.
