@@ -36,6 +36,9 @@ DaemonConfig daemonConfigFromJson(const json& root, const std::string& source,
   getPath(r, "plan", base_dir, c.plan);
   r.get("settle_s", c.settle_s, 0, 60);
   r.get("bar_window_s", c.bar_window_s, 0, 10);
+  r.get("dwell_mode", c.dwell_mode);
+  r.get("adaptive_window_s", c.adaptive_window_s, 0.01, 10);
+  r.get("bar_noise_mm", c.bar_noise_mm, 0, 1);
   r.get("bar_soft_limit_mm", c.bar_soft_limit_mm, 0.01, 100);
   r.get("bar_hard_limit_mm", c.bar_hard_limit_mm, 0.01, 100);
   r.get("centering", c.centering);
@@ -66,6 +69,14 @@ DaemonConfig daemonConfigFromJson(const json& root, const std::string& source,
     r.fail("bar_soft_limit_mm", "must be below bar_hard_limit_mm");
   if (c.check_warn_ratio > c.check_fail_ratio)
     r.fail("check_warn_ratio", "must not be above check_fail_ratio");
+  if (c.dwell_mode != "fixed" && c.dwell_mode != "adaptive")
+    r.fail("dwell_mode", "fixed or adaptive");
+  if (c.dwell_mode == "adaptive" && c.bar_noise_mm <= 0)
+    r.fail("bar_noise_mm",
+           "required with dwell_mode adaptive: the bar reader's noise (1 sigma, mm), as measured "
+           "with the robot still (docs/settling.md)");
+  if (c.dwell_mode == "adaptive" && c.adaptive_window_s >= c.settle_s)
+    r.fail("adaptive_window_s", "must be below settle_s, or the adaptive dwell never ends early");
   static const std::set<std::string> levels = {"trace", "debug", "info", "warn", "error"};
   if (!levels.count(c.log_level)) r.fail("log_level", "one of trace, debug, info, warn, error");
   if (c.token_file.empty()) c.token_file = (std::filesystem::path(c.data_dir) / "token").string();

@@ -115,6 +115,8 @@ void RunContext::reportLinkFaults(RunDir& dir) {
 void RunContext::onBarLine(const drivers::BarReading& r) {
   last_reading_ = r;
   if (collecting_ && r.kind == drivers::BarLineKind::kReading) window_.push_back(r.value_mm);
+  if (steady_ && r.kind == drivers::BarLineKind::kReading)
+    steady_->add(std::chrono::duration<double>(r.time - dwell_start_).count(), r.value_mm);
   proto::Bar b{r.sequence, wireKind(r.kind), std::nullopt, std::nullopt, monotonicMicros(r.time)};
   if (r.kind == drivers::BarLineKind::kReading) {
     b.deflection_mm = r.value_mm;
@@ -183,6 +185,32 @@ void RunContext::spinUntil(Clock::time_point until, bool watch_bar) {
     io.poll(std::min(until, now + std::chrono::milliseconds(10)));
     if (watch_bar) watchBar();
   }
+}
+
+bool RunContext::dwell(Clock::time_point motion_end) {
+  const auto until = motion_end + fromSeconds(config.settle_s);
+  if (config.dwell_mode != "adaptive") {
+    spinUntil(until, true);
+    return false;
+  }
+  SteadyCriteria criteria;
+  criteria.noise_mm = config.bar_noise_mm;
+  criteria.window_s = config.adaptive_window_s;
+  SteadyWindow steady(criteria);
+  struct Feeding {  // also when a fault ends the dwell: no reading is fed to a window gone
+    SteadyWindow*& slot;
+    Feeding(SteadyWindow*& s, SteadyWindow& w) : slot(s) { slot = &w; }
+    ~Feeding() { slot = nullptr; }
+  };
+  dwell_start_ = motion_end;
+  const Feeding feeding(steady_, steady);
+  for (auto now = Clock::now(); now < until; now = Clock::now()) {
+    checkpoint();
+    io.poll(std::min(until, now + std::chrono::milliseconds(10)));
+    watchBar();
+    if (steady.steady()) return true;
+  }
+  return false;
 }
 
 JointsDeg RunContext::move(const JointsDeg& target, bool bar_attached) {

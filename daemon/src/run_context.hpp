@@ -9,6 +9,7 @@
 #include <robocal/daemon/config.hpp>
 #include <robocal/daemon/run.hpp>
 #include <robocal/daemon/run_store.hpp>
+#include <robocal/daemon/steady_window.hpp>
 #include <robocal/planner/cell.hpp>
 #include <robocal/planner/plan.hpp>
 
@@ -79,6 +80,10 @@ class RunContext {
   // bar when `watch_bar`.
   void spin(double seconds, bool watch_bar);
   void spinUntil(Clock::time_point until, bool watch_bar);
+  // The dwell at a data point, from the move's end, watched: settle_s (dwell_mode fixed), or until
+  // the bar's readings are steady and never later than settle_s (adaptive; steady_window.hpp).
+  // True when steadiness ended it.
+  bool dwell(Clock::time_point motion_end);
   // A joint move watched for stop requests, controller errors and the bar: with the bar attached
   // its limits; believed detached, a reading that changes (the bar is still attached after all).
   JointsDeg move(const JointsDeg& target, bool bar_attached);
@@ -118,6 +123,8 @@ class RunContext {
   std::optional<drivers::BarReading> last_reading_;
   std::vector<double> window_;  // readings collected while averaging
   bool collecting_ = false;
+  SteadyWindow* steady_ = nullptr;  // fed the readings during an adaptive dwell
+  Clock::time_point dwell_start_{};
   double bar_offset_mm_ = 0;
   std::map<std::string, long> link_faults_reported_;
 };

@@ -18,10 +18,6 @@ std::tuple<int, double, double> pointKey(int shell, double lat_deg, double lon_d
   return {shell, std::round(lat_deg * 1e3) / 1e3, std::round(lon_deg * 1e3) / 1e3};
 }
 
-Clock::duration fromSeconds(double seconds) {
-  return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
-}
-
 // One data point's timing, from the end of its move: the dwell (settle) until the bar window
 // opens, and the way to the sample's fsync. Logged as a "timing" event in the run's event log
 // (`robocal run-timing` summarises them; docs/reliability.md, dwell timing).
@@ -32,13 +28,18 @@ struct PointTiming {
   static double msBetween(Clock::time_point from, Clock::time_point to) {
     return toMicrosecond(std::chrono::duration<double, std::milli>(to - from).count());
   }
-  json toEvent(int shell, double lat_deg, double lon_deg, double settle_s) const {
+  // `dwell_mode` as configured; `steady`: an adaptive dwell ended by steady readings before
+  // settle_s (settle_error_ms is then negative: the time saved).
+  json toEvent(int shell, double lat_deg, double lon_deg, double settle_s,
+               const std::string& dwell_mode, bool steady) const {
     const double settle_achieved_ms = msBetween(motion_complete, bar_window_start);
     return {{"event", "timing"},
             {"shell", shell},
             {"lat_deg", lat_deg},
             {"lon_deg", lon_deg},
             {"settle_s", settle_s},
+            {"dwell_mode", dwell_mode},
+            {"steady", steady},
             {"settle_achieved_ms", settle_achieved_ms},
             {"settle_error_ms", toMicrosecond(settle_achieved_ms - settle_s * 1e3)},
             {"where_ms", msBetween(bar_window_start, where_end)},
@@ -325,7 +326,7 @@ JointsDeg ShellRunner::recordPoint(const ShellPlan& planned, const PlanStep& ste
   const DaemonConfig& config = ctx_.config;
   PointTiming timing;
   const auto motion_end = timing.motion_complete = Clock::now();
-  ctx_.spinUntil(motion_end + fromSeconds(config.settle_s), true);
+  const bool steady = ctx_.dwell(motion_end);
   const RunContext::Measurement m = ctx_.measureHere();
   const double dwell_s = std::chrono::duration<double>(m.bar_window_start - motion_end).count();
   Sample s = shellSample(planned, m);
@@ -335,7 +336,8 @@ JointsDeg ShellRunner::recordPoint(const ShellPlan& planned, const PlanStep& ste
   timing.sample_on_disk = Clock::now();
   timing.bar_window_start = m.bar_window_start;
   timing.where_end = m.where_end;
-  dir_.logEvent(timing.toEvent(s.shell, s.lat_deg, s.lon_deg, config.settle_s));
+  dir_.logEvent(
+      timing.toEvent(s.shell, s.lat_deg, s.lon_deg, config.settle_s, config.dwell_mode, steady));
   ctx_.reportLinkFaults(dir_);
   samples_.push_back(s);
   centring_.add(s);

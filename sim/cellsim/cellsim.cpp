@@ -341,10 +341,10 @@ class Cell {
     std::snprintf(buf, sizeof buf,
                   "joints_deg=%.3f,%.3f,%.3f,%.3f,%.3f,%.3f moving=%d estop=%d speed=%.0f "
                   "connection=%s bar_mm=%.3f extension_mm=%.3f deflection_mm=%.4f "
-                  "broken_events=%zu val=%s bar=%s",
+                  "ring_mm=%.4f broken_events=%zu val=%s bar=%s",
                   joints_[0], joints_[1], joints_[2], joints_[3], joints_[4], joints_[5],
                   moving_ ? 1 : 0, estop_ ? 1 : 0, speed_, connection_name_.c_str(), bar_mm_,
-                  extension_mm_, connected ? d : 0.0, events_.size(),
+                  extension_mm_, connected ? d : 0.0, ring(), events_.size(),
                   val_.isOpen() ? val_.slavePath().c_str() : "-",
                   bar_.isOpen() ? bar_.slavePath().c_str() : "-");
     return buf;
@@ -422,7 +422,12 @@ class Cell {
       const double t = secondsSince(move_t0_);
       const double s = move_duration_s_ > 0 ? std::min(1.0, t / move_duration_s_) : 1.0;
       for (int i = 0; i < 6; ++i) joints_[i] = move_from_[i] + (target_[i] - move_from_[i]) * s;
-      if (s >= 1.0) moving_ = false;
+      if (s >= 1.0) {
+        moving_ = false;
+        // The ring starts when the motion ended, not at this tick.
+        ring_t0_ = move_t0_ + toDuration(move_duration_s_);
+        ring_mm_ = o_.settling.amplitudeFor(move_travel_mm_);
+      }
       if (estop_at_ && t >= *estop_at_) {
         estop_at_.reset();
         estop();
@@ -450,6 +455,18 @@ class Cell {
     if (o_.quantum_deg > 0)
       for (double& v : q) v = std::round(v / o_.quantum_deg) * o_.quantum_deg;
     return q;
+  }
+
+  Eigen::Vector3d toolPosition(const Joints6& joints_deg) const {
+    JointsDeg j;
+    for (int i = 0; i < 6; ++i) j[i] = joints_deg[i];
+    return kin_.toolPose(j).translation();
+  }
+
+  // The tool's ringing along the bar now (settling.hpp), in cell time (time_scale).
+  double ring() const {
+    if (moving_) return 0;  // the model starts at the end of a move
+    return o_.settling.ring(ring_mm_, secondsSince(ring_t0_) * o_.time_scale);
   }
 
   drivers::Location6 location() const {
@@ -564,6 +581,7 @@ class Cell {
       double longest = 0;
       for (int k = 0; k < 6; ++k) longest = std::max(longest, std::abs(target[k] - joints_[k]));
       move_duration_s_ = longest / (o_.joint_speed_deg_s * speed_ / 100.0 * o_.time_scale);
+      move_travel_mm_ = (toolPosition(target) - toolPosition(joints_)).norm();
       move_t0_ = Clock::now();
       moving_ = true;
       if (o_.estop_on_move > 0 && moves_ == o_.estop_on_move) estop_at_ = move_duration_s_ / 2;
@@ -633,8 +651,8 @@ class Cell {
     if (connected && std::abs(d) > o_.range_mm)
       return drivers::formatBarStatus(BarLineKind::kOverRange, d < 0);
     std::normal_distribution<double> noise(0.0, o_.noise_mm), play(0.0, kLoosePlayMm);
-    const double value_mm =
-        d + (o_.noise_mm > 0 ? noise(rng_) : 0.0) + (loose_ && connected ? play(rng_) : 0.0);
+    const double value_mm = d + (connected ? ring() : 0.0) + (o_.noise_mm > 0 ? noise(rng_) : 0.0) +
+                            (loose_ && connected ? play(rng_) : 0.0);
     return drivers::formatBarReading(bar_config_.format, value_mm / bar_config_.unit_scale_mm);
   }
 
@@ -668,6 +686,9 @@ class Cell {
   bool moving_ = false, estop_ = false;
   Clock::time_point move_t0_{};
   double move_duration_s_ = 0, speed_ = 50;
+  double move_travel_mm_ = 0;       // tool travel of the current move
+  Clock::time_point ring_t0_{};     // the end of the last move
+  double ring_mm_ = 0;              // its ringing's starting amplitude
   std::optional<double> estop_at_;  // seconds into the current move
   long moves_ = 0;
   // VAL II

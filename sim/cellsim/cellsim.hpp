@@ -1,12 +1,15 @@
 // robocal-cellsim: a simulated robot cell behind two pseudo-terminals. One speaks the VAL II
 // monitor dialect, the other the ball-bar reader's; behind them a "true" robot (a model file),
 // joint motion at finite speed, the bar's true length around the connected ball and chuck, LVDT
-// noise, joint quantisation, the bar's range, and injectable faults. A control channel (a unix
+// noise, the tool's ringing after a move (settling.hpp), joint quantisation, the bar's range,
+// and injectable faults. A control channel (a unix
 // socket and/or stdin) swaps the bar's connection and triggers faults.
 //
 // Everything runs on one Asio event loop; the protocol text is formatted and recognised with the
 // drivers' own protocol helpers (robocal/drivers/protocol.hpp).
 #pragma once
+
+#include "settling.hpp"
 
 #include <robocal/drivers/config.hpp>
 #include <robocal/drivers/protocol.hpp>
@@ -31,9 +34,10 @@ struct Options {
   unsigned long seed = 1;
   std::string connection = "none";  // B1C1 ... or none
   double bar_mm = 100, extension_mm = 0;
-  bool bar_here = false;  // bar length set so that the bar reads 0 at the start pose
-  double range_mm = 1.5;  // LVDT travel each way
-  std::string bar_mode;   // polled | streamed (default: the config's)
+  bool bar_here = false;   // bar length set so that the bar reads 0 at the start pose
+  double range_mm = 1.5;   // LVDT travel each way
+  SettlingModel settling;  // the tool's ringing after each move (settling.hpp); in cell time
+  std::string bar_mode;    // polled | streamed (default: the config's)
   double stream_hz = 20;
   bool val_echo = true;
   std::string val_eol = "\r\n";

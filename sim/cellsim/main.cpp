@@ -36,6 +36,13 @@ fault stall val|bar S | fault disconnect val|bar S | quit
   --bar-mm L|here            bar length at zero deflection, without extension     [100]
   --extension-mm E           extension bar                                        [0]
   --range-mm R               LVDT travel each way; past it: over range, "broken"  [1.5]
+Settling (docs/settling.md; an assumption, not a measurement; in cell time, --time-scale applies):
+after each move the bar reads A exp(-t/tau) cos(2 pi f t) on top of the true length,
+A = amplitude x tool travel / 100 mm, at most the maximum
+  --settle-amplitude-mm-per-100mm A   0: no ringing                            [0.02]
+  --settle-max-amplitude-mm M                                                  [0.1]
+  --settle-time-constant-s TAU                                                 [0.3]
+  --settle-frequency-hz F                                                      [8]
   --bar-mode polled|streamed override the config's bar.mode
   --stream-hz F              streamed readings per second                         [20]
   --val-no-echo              the controller does not echo what it is sent
@@ -97,6 +104,10 @@ int main(int argc, char** argv) {
                                                {"bar-mm", true},
                                                {"extension-mm", true},
                                                {"range-mm", true},
+                                               {"settle-amplitude-mm-per-100mm", true},
+                                               {"settle-max-amplitude-mm", true},
+                                               {"settle-time-constant-s", true},
+                                               {"settle-frequency-hz", true},
                                                {"bar-mode", true},
                                                {"stream-hz", true},
                                                {"val-no-echo", false},
@@ -182,6 +193,18 @@ int main(int argc, char** argv) {
     }
     o.extension_mm = num("extension-mm", o.extension_mm);
     o.range_mm = num("range-mm", o.range_mm);
+    auto& settle = o.settling;
+    settle.amplitude_mm_per_100mm =
+        num("settle-amplitude-mm-per-100mm", settle.amplitude_mm_per_100mm);
+    settle.max_amplitude_mm = num("settle-max-amplitude-mm", settle.max_amplitude_mm);
+    settle.time_constant_s = num("settle-time-constant-s", settle.time_constant_s);
+    settle.frequency_hz = num("settle-frequency-hz", settle.frequency_hz);
+    if (settle.amplitude_mm_per_100mm < 0 || settle.max_amplitude_mm < 0)
+      throw std::invalid_argument(
+          "--settle-amplitude-mm-per-100mm and --settle-max-amplitude-mm must not be negative");
+    if (settle.time_constant_s <= 0 || settle.frequency_hz < 0)
+      throw std::invalid_argument(
+          "--settle-time-constant-s must be positive, --settle-frequency-hz not negative");
     if (has("bar-mode")) o.bar_mode = v["bar-mode"];
     o.stream_hz = num("stream-hz", o.stream_hz);
     if (o.stream_hz <= 0) throw std::invalid_argument("--stream-hz must be positive");

@@ -32,28 +32,34 @@ struct Cell {
   // of a mistake: a free bar, a wrong chuck, a bar left on).
   std::function<bool(proto::Client&, const nlohmann::json& prompt)> mistake;
 
+  // `daemon_keys` replace or add robocald config keys; `sim_args` are added to cellsim's (a later
+  // option wins).
   Cell(const std::vector<std::string>& connections, unsigned seed, bool centering = true,
-       double lon_step_deg = 60, double time_scale = 50) {
+       double lon_step_deg = 60, double time_scale = 50,
+       const nlohmann::json& daemon_keys = nlohmann::json::object(),
+       const std::vector<std::string>& sim_args = {}) {
     truth_path = dir / "truth.json";
     const auto r = runRobocal("simulate --model " + kModel + " --seed " + std::to_string(seed) +
                               " --connections B1C1 --points-per-shell 1 --out " + (dir / "x.csv") +
                               " --truth-out " + truth_path);
     REQUIRE(r.exit_code == 0);
-    sim = std::make_unique<CellSimProcess>(std::vector<std::string>{
-        "--model", truth_path, "--time-scale", std::to_string(time_scale), "--bar-mode", "streamed",
-        "--stream-hz", "100", "--bar-mm", "150", "--range-mm", "2.0", "--noise-mm", "0.03"});
+    std::vector<std::string> args{
+        "--model",    truth_path, "--time-scale", std::to_string(time_scale),
+        "--bar-mode", "streamed", "--stream-hz",  "100",
+        "--bar-mm",   "150",      "--range-mm",   "2.0",
+        "--noise-mm", "0.03"};
+    args.insert(args.end(), sim_args.begin(), sim_args.end());
+    sim = std::make_unique<CellSimProcess>(args);
     std::ofstream(dir / "cell.json") << smallCell(connections, {0}, lon_step_deg).dump(1);
     nlohmann::json drivers = drivers::toJson(sim->driversConfig());
     drivers["bar"]["mode"] = "streamed";
     drivers["val"]["poll_interval_s"] = 0.01;
-    daemon = std::make_unique<DaemonProcess>(nlohmann::json{{"model", kModel},
-                                                            {"cell", dir / "cell.json"},
-                                                            {"settle_s", 0.02},
-                                                            {"bar_window_s", 0.03},
-                                                            {"bar_soft_limit_mm", 1.0},
-                                                            {"bar_hard_limit_mm", 1.6},
-                                                            {"centering", centering},
-                                                            {"drivers", drivers}});
+    nlohmann::json config{{"model", kModel},          {"cell", dir / "cell.json"},
+                          {"settle_s", 0.02},         {"bar_window_s", 0.03},
+                          {"bar_soft_limit_mm", 1.0}, {"bar_hard_limit_mm", 1.6},
+                          {"centering", centering},   {"drivers", drivers}};
+    config.update(daemon_keys);
+    daemon = std::make_unique<DaemonProcess>(config);
     daemon->start();
   }
 
