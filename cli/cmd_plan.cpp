@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 
 namespace robocal::cli {
@@ -96,8 +97,13 @@ int run(const std::vector<std::string>& argv) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   if (!check && !optimal) summarizeIdentifiability(model, plan);  // the others did
+  // A calibration plan's accuracy where the user works (a check plan is not fitted).
   const double predicted_mm =
-      predictedWorkVolumeError(model, plan, work_joints, design.noise_sigma_mm);
+      check ? -1 : predictedWorkVolumeError(model, plan, work_joints, design.noise_sigma_mm);
+  if (std::isfinite(predicted_mm)) {
+    plan.summary.predicted_work_volume_error_mm = predicted_mm;
+    plan.summary.noise_sigma_mm = design.noise_sigma_mm;
+  }
 
   // The forecast: the plan run by robots that differ from the model as the cell assumes. The
   // cell's uncertainty is that of a nominal model: a check planned with a calibrated model (one
@@ -188,11 +194,12 @@ int run(const std::vector<std::string>& argv) {
         "warning: with that model error the bar can leave its range: run it with the "
         "model refined as data arrive (the daemon re-plans the rest of each shell), or "
         "calibrate roughly first\n");
-  std::printf(
-      "work volume: predicted RMS tool position error %.4f mm after the fit (bar noise %.3f mm, "
-      "%zu poses); cell time %.1f min: robot %.1f min, %d bar swaps %.1f min\n",
-      predicted_mm, design.noise_sigma_mm, work_joints.size(), sum.cell_time_s / 60.0,
-      sum.duration_s / 60.0, sum.shells, sum.swap_time_s / 60.0);
+  if (!check)
+    std::printf(
+        "work volume: predicted RMS tool position error %.4f mm after the fit (bar noise %.3f "
+        "mm, %zu poses); cell time %.1f min: robot %.1f min, %d bar swaps %.1f min\n",
+        predicted_mm, design.noise_sigma_mm, work_joints.size(), sum.cell_time_s / 60.0,
+        sum.duration_s / 60.0, sum.shells, sum.swap_time_s / 60.0);
   if (optimal)
     std::printf("optimal: %d points chosen from %d candidates in %d round%s%s\n", sum.points,
                 design_report.candidates, design_report.rounds,

@@ -3,6 +3,8 @@
 # calibration the way a cell would run it: robocal-cellsim plays the robot and the ball-bar on
 # pseudo-terminals, robocald runs the two-set plan (nine shells, then nine with the 150 mm
 # extension), and a simulated operator answers the connection prompts. Output in out/.
+# ROBOCAL_PLAN_BUDGET_MIN=M runs an optimal plan of M minutes of cell time instead of the
+# cell's grid (docs/cell-time.md).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 # shellcheck source=sim-cell.sh
@@ -28,7 +30,10 @@ echo "== a perturbed true robot (the simulate defaults: balls 1-2 mm off the nom
   --out "$out/unused.csv" --truth-out "$out/truth.json" | tail -2
 echo
 echo "== the off-line plan"
-"$bin" plan --model "$model" --cell "$cell" --out "$out/plan.json" | grep -E "^(plan|identification|forecast|planned)"
+budget=()
+[[ -n ${ROBOCAL_PLAN_BUDGET_MIN:-} ]] && budget=(--time-budget-min "$ROBOCAL_PLAN_BUDGET_MIN")
+"$bin" plan --model "$model" --cell "$cell" --out "$out/plan.json" "${budget[@]}" |
+  grep -E "^(plan|identification|forecast|work volume|optimal|planned)"
 echo
 echo "== robocal-cellsim (VAL II and ball-bar on pseudo-terminals) and robocald"
 start_sim_cell "$build" "$out" "$model" "$cell"

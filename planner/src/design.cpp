@@ -1,46 +1,23 @@
 #include <robocal/planner/design.hpp>
 
+#include "parallel.hpp"
+
 #include <robocal/kinematics/kinematics.hpp>
 #include <robocal/solver/identifiability.hpp>
 #include <robocal/solver/problem.hpp>
 
 #include <Eigen/Cholesky>
+#include <Eigen/QR>
 #include <algorithm>
-#include <atomic>
 #include <cmath>
-#include <exception>
 #include <limits>
-#include <mutex>
 #include <numeric>
 #include <stdexcept>
-#include <thread>
 
 namespace robocal {
 namespace {
 
-// Runs job(i) for i in [0, n) on a few threads; rethrows the first failure.
-template <class Job>
-void parallelFor(size_t n, const Job& job) {
-  std::atomic<size_t> next{0};
-  std::exception_ptr failure;
-  std::mutex failure_mutex;
-  auto worker = [&] {
-    for (size_t i = next++; i < n; i = next++) {
-      try {
-        job(i);
-      } catch (...) {
-        const std::lock_guard<std::mutex> lock(failure_mutex);
-        if (!failure) failure = std::current_exception();
-      }
-    }
-  };
-  const unsigned threads = std::clamp(std::thread::hardware_concurrency(), 1u, 4u);
-  std::vector<std::thread> pool;
-  for (unsigned t = 1; t < threads && t < n; ++t) pool.emplace_back(worker);
-  worker();
-  for (std::thread& t : pool) t.join();
-  if (failure) std::rethrow_exception(failure);
-}
+using detail::parallelFor;
 
 // One shell the design may use, with its candidates as rows.
 struct ShellPool {
@@ -158,7 +135,20 @@ std::vector<int> identifiedParameters(const Model& model, const std::vector<Samp
   Eigen::VectorXd residuals;
   Eigen::MatrixXd jacobian;
   evaluateProblem(model, toParams(model), samples, residuals, &jacobian);
-  return analyzeIdentifiability(triangularFactor(jacobian)).identified;
+  Eigen::MatrixXd r = triangularFactor(jacobian);
+  const int rank = analyzeIdentifiability(r).rank;
+  // The `rank` best-conditioned columns (pivoted QR of the unit-norm columns). At a nominal
+  // model they span what the solver's choice spans (the rest are exactly redundant), so the
+  // tool's predicted error is the same; at a calibrated model, whose perturbed axes make some
+  // redundant pairs barely distinguishable, they leave out the barely identified ones instead
+  // of keeping them by the solver's fixed priority.
+  for (int c = 0; c < r.cols(); ++c)
+    if (r.col(c).norm() > 0) r.col(c).normalize();
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(r);
+  std::vector<int> out;
+  for (int k = 0; k < rank; ++k) out.push_back(qr.colsPermutation().indices()[k]);
+  std::sort(out.begin(), out.end());
+  return out;
 }
 
 double predictedWorkVolumeError(const Model& model, const Plan& plan,

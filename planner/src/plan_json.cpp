@@ -110,6 +110,10 @@ ordered_json planToJson(const Plan& plan) {
     summary["expected_rank"] = s.expected_rank;
     summary["condition_number"] = tidy(s.condition_number);
   }
+  if (s.predicted_work_volume_error_mm >= 0) {
+    summary["predicted_work_volume_error_mm"] = tidy(s.predicted_work_volume_error_mm);
+    summary["noise_sigma_mm"] = tidy(s.noise_sigma_mm);
+  }
   j["summary"] = summary;
   j["settings"] = cellToJson(plan.cell);
   ordered_json shells = ordered_json::array();
@@ -242,6 +246,8 @@ Plan planFromJson(const json& root, const std::string& source) {
     plan.summary.rank = r.count(s, "summary", "rank", 0);
     plan.summary.expected_rank = r.count(s, "summary", "expected_rank", 36);
     plan.summary.condition_number = s.value("condition_number", 0.0);
+    plan.summary.predicted_work_volume_error_mm = s.value("predicted_work_volume_error_mm", -1.0);
+    plan.summary.noise_sigma_mm = s.value("noise_sigma_mm", 0.0);
   }
   return plan;
 }

@@ -1,19 +1,17 @@
 #include <robocal/planner/plan.hpp>
 
+#include "parallel.hpp"
+
 #include <robocal/kinematics/ik.hpp>
 #include <robocal/kinematics/units.hpp>
 #include <robocal/solver/identifiability.hpp>
 #include <robocal/solver/problem.hpp>
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstdio>
-#include <exception>
 #include <functional>
-#include <mutex>
 #include <numbers>
-#include <thread>
 
 namespace robocal {
 namespace {
@@ -836,26 +834,10 @@ Plan planCell(const Model& model, const CellConfig& cell) {
     for (const Connection& c : cell.connections) jobs.push_back({c, extension});
   // Shells are independent: plan them on a few threads.
   plan.shells.resize(jobs.size());
-  std::atomic<size_t> next{0};
-  std::exception_ptr failure;
-  std::mutex failure_mutex;
-  auto worker = [&] {
-    for (size_t i = next++; i < jobs.size(); i = next++) {
-      try {
-        plan.shells[i] =
-            planner.planShell(jobs[i].connection, jobs[i].extension_mm, static_cast<int>(i) + 1);
-      } catch (...) {
-        const std::lock_guard<std::mutex> lock(failure_mutex);
-        if (!failure) failure = std::current_exception();
-      }
-    }
-  };
-  const unsigned threads = std::clamp(std::thread::hardware_concurrency(), 1u, 4u);
-  std::vector<std::thread> pool;
-  for (unsigned t = 1; t < threads && t < jobs.size(); ++t) pool.emplace_back(worker);
-  worker();
-  for (std::thread& t : pool) t.join();
-  if (failure) std::rethrow_exception(failure);
+  detail::parallelFor(jobs.size(), [&](size_t i) {
+    plan.shells[i] =
+        planner.planShell(jobs[i].connection, jobs[i].extension_mm, static_cast<int>(i) + 1);
+  });
   for (const ShellPlan& shell : plan.shells)
     if (shell.summary.points == 0) {
       std::string msg =

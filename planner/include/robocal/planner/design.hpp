@@ -59,7 +59,8 @@ struct DesignReport {
   int rounds = 0;  // selections made to meet the budget with the real motion
 };
 
-// The identified parameters of a set of plan points (as solveCalibration would choose them).
+// The parameters a fit of these points would identify: as many as solveCalibration estimates,
+// the best-conditioned ones (the same predicted tool error as the solver's own choice).
 std::vector<int> identifiedParameters(const Model& model, const std::vector<Sample>& samples);
 
 // Predicted RMS tool position error over the work volume (mm) of any plan's data points.

@@ -88,6 +88,10 @@ struct PlanSummary {
   double predicted_change_mm = -1;      // worst over shells; < 0: not computed
   int rank = 0, expected_rank = 36;     // identification Jacobian of all the plan's points
   double condition_number = 0;          // of the column-scaled Jacobian on its identified part
+  // Predicted RMS tool position error over the cell's work volume after the fit (design.hpp),
+  // for the bar noise below; < 0: not computed.
+  double predicted_work_volume_error_mm = -1;
+  double noise_sigma_mm = 0;
 };
 
 // What a plan is for: the calibration's data, or the short check that the calibrated model still
