@@ -35,18 +35,8 @@ class Selection {
     refresh();
   }
 
-  // How much adding row j lowers trace(M^-1 W), and the same for removing it (negative).
-  double gainOfAdding(const Eigen::VectorXd& j) const {
-    const Eigen::VectorXd u = inverse_ * j;
-    return u.dot(criterion_.weight() * u) / (1.0 + j.dot(u));
-  }
-  double lossOfRemoving(const Eigen::VectorXd& j) const {
-    const Eigen::VectorXd u = inverse_ * j;
-    const double d = 1.0 - j.dot(u);
-    return d <= 1e-12 ? std::numeric_limits<double>::infinity()
-                      : u.dot(criterion_.weight() * u) / d;
-  }
-  // gainOfAdding for every column of `rows`, with two matrix products instead of a loop.
+  // How much adding each column j of `rows` would lower trace(M^-1 W):
+  // (j^T M^-1 W M^-1 j) / (1 + j^T M^-1 j), for all columns with two matrix products.
   Eigen::VectorXd gainsOfAdding(const Eigen::MatrixXd& rows) const {
     const Eigen::MatrixXd u = inverse_ * rows;
     const Eigen::MatrixXd wu = criterion_.weight() * u;
