@@ -79,9 +79,7 @@ int run(const std::vector<std::string>& argv) {
   DesignReport design_report;
   try {
     cell = check ? healthCheckCell(calibration_cell) : calibration_cell;
-    const Compensator nominal_only(model, model);
-    for (const Eigen::Isometry3d& pose : workVolumePoses(cell.work_volume, nominal_only))
-      work_joints.push_back(nominal_only.forPose(pose).joints_deg);
+    work_joints = workVolumeJoints(cell.work_volume, Compensator(model, model));
     if (optimal)
       plan = planOptimal(model, cell, work_joints, design, &design_report);
     else

@@ -9,13 +9,16 @@
 
 namespace robocal {
 
-std::vector<Eigen::Isometry3d> workVolumePoses(const WorkVolume& work,
-                                               const Compensator& compensator) {
+namespace {
+
+// The work volume's draws that compensate with status ok, with their targets.
+std::vector<std::pair<Eigen::Isometry3d, CompensatedTarget>> drawWorkVolume(
+    const WorkVolume& work, const Compensator& compensator) {
   std::mt19937_64 rng(static_cast<std::uint64_t>(work.seed));
   auto uniform = [&](double lo, double hi) {
     return std::uniform_real_distribution<double>(lo, hi)(rng);
   };
-  std::vector<Eigen::Isometry3d> poses;
+  std::vector<std::pair<Eigen::Isometry3d, CompensatedTarget>> poses;
   const long max_draws = 50L * work.poses;
   for (long draw = 0; draw < max_draws && static_cast<int>(poses.size()) < work.poses; ++draw) {
     const Eigen::Isometry3d pose =
@@ -27,7 +30,7 @@ std::vector<Eigen::Isometry3d> workVolumePoses(const WorkVolume& work,
                        uniform(work.rx_range_deg[0], work.rx_range_deg[1]));
     // Reachable by the nominal model: the controller could be commanded there at all.
     const CompensatedTarget t = compensator.forPose(pose);
-    if (t.ok()) poses.push_back(pose);
+    if (t.ok()) poses.push_back({pose, t});
   }
   if (static_cast<int>(poses.size()) < work.poses)
     throw std::invalid_argument(
@@ -35,6 +38,22 @@ std::vector<Eigen::Isometry3d> workVolumePoses(const WorkVolume& work,
         " poses drawn from the box and angle ranges are reachable (wanted " +
         std::to_string(work.poses) + "): move the box or the angle ranges into the arm's reach");
   return poses;
+}
+
+}  // namespace
+
+std::vector<Eigen::Isometry3d> workVolumePoses(const WorkVolume& work,
+                                               const Compensator& compensator) {
+  std::vector<Eigen::Isometry3d> out;
+  for (const auto& [pose, target] : drawWorkVolume(work, compensator)) out.push_back(pose);
+  return out;
+}
+
+std::vector<JointsDeg> workVolumeJoints(const WorkVolume& work, const Compensator& compensator) {
+  std::vector<JointsDeg> out;
+  for (const auto& [pose, target] : drawWorkVolume(work, compensator))
+    out.push_back(target.joints_deg);
+  return out;
 }
 
 ErrorStats errorStats(std::vector<double> values) {

@@ -120,12 +120,10 @@ TEST_CASE("a full run to RESULT recovers the true robot", "[e2e]") {
   // measured): the nominal solutions of poses there. One point alone is too noisy a judge of a
   // 144-sample fit (its error at one pose ranges over 0.05-0.25 mm with the readings' timing).
   const Model nominal_model = loadModelFile(kModel);
-  const Compensator nominal_only(nominal_model, nominal_model);
   WorkVolume work;
   work.poses = 20;
-  std::vector<JointsDeg> program;
-  for (const Eigen::Isometry3d& pose : workVolumePoses(work, nominal_only))
-    program.push_back(nominal_only.forPose(pose).joints_deg);
+  const std::vector<JointsDeg> program =
+      workVolumeJoints(work, Compensator(nominal_model, nominal_model));
   const json pose_target = {{"name", "p1"}, {"pose_mm_deg", {0, 0, 250, 0, 135, 0}}};
   json compensate = {{"cmd", "compensate"}, {"targets", {pose_target}}};
   for (const JointsDeg& q : program)

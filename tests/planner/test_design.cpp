@@ -41,13 +41,9 @@ DesignOptions smallOptions() {
 
 const std::vector<JointsDeg>& workJoints() {
   static const std::vector<JointsDeg> joints = [] {
-    const Compensator nominal_only(nominal(), nominal());
     WorkVolume work = defaultCell().work_volume;
     work.poses = 60;
-    std::vector<JointsDeg> out;
-    for (const Eigen::Isometry3d& pose : workVolumePoses(work, nominal_only))
-      out.push_back(nominal_only.forPose(pose).joints_deg);
-    return out;
+    return workVolumeJoints(work, Compensator(nominal(), nominal()));
   }();
   return joints;
 }

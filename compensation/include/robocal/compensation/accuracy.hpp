@@ -19,6 +19,9 @@ namespace robocal {
 // of the arm's reach: say so rather than loop).
 std::vector<Eigen::Isometry3d> workVolumePoses(const WorkVolume& work,
                                                const Compensator& compensator);
+// The same poses' compensated joints (with Compensator(nominal, nominal): the nominal joints, as
+// an off-line program or the plan's work-volume objective has them).
+std::vector<JointsDeg> workVolumeJoints(const WorkVolume& work, const Compensator& compensator);
 
 struct ErrorStats {
   size_t count = 0;
