@@ -128,10 +128,12 @@ struct RunController::Impl {
       std::optional<RunJob> todo = shared.with([](RunData& d) {
         std::optional<RunJob> j = std::move(d.job);
         d.job.reset();
+        d.starting = j && j->kind != RunJob::kClose;
         return j;
       });
       if (todo) {
         execute(std::move(*todo));
+        shared.with([](RunData& d) { d.starting = false; });
         continue;
       }
       // Idle: keep the bar streaming to watchers and both ports ready, reconnecting now and then.

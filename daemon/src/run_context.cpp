@@ -52,6 +52,7 @@ void RunContext::setState(proto::RunState to, const std::string& reason) {
     const proto::RunState was = d.state;
     d.state = to;
     d.state_reason = reason;
+    d.starting = false;
     return was;
   });
   spdlog::info("state {} -> {}{}{}", proto::runStateName(from), proto::runStateName(to),

@@ -34,6 +34,9 @@ struct RunSummary {
 
 struct RunData {
   std::optional<RunJob> job;
+  // A start or resume the run thread has taken but not yet given a state (it creates the run
+  // folder first): busy, so a second start in that gap is refused.
+  bool starting = false;
   proto::RunState state = proto::RunState::kIdle;
   std::string state_reason;
   std::string run_id;        // current or last run
@@ -57,7 +60,7 @@ struct RunData {
   BarAttachment attachment;      // persisted in <data_dir>/bar.json
   std::vector<RunSummary> runs;  // oldest first; kept by the run thread as it writes them
 
-  bool busy() const { return proto::isBusy(state) || job.has_value(); }
+  bool busy() const { return proto::isBusy(state) || job.has_value() || starting; }
 };
 
 class RunShared {
