@@ -6,9 +6,12 @@
 #include <robocal/build_info.hpp>
 #include <robocal/drivers/config.hpp>
 #include <robocal/drivers/diagnose.hpp>
+#include <robocal/drivers/move_test.hpp>
+#include <robocal/formats/model_json.hpp>
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 
 namespace robocal::cli {
@@ -34,6 +37,15 @@ present, else the daemon's %s if present, else the defaults.
   --bar-mode M          override bar.mode (polled or streamed)
   --bar-format F        override bar.format (mm_suffix, mitutoyo, gn)
   --seconds S           how long to show live bar readings              [3]
+
+Bring-up move test (moves the arm; the controller only):
+  --move-test DEG       after WHERE: SPEED 10, then each joint in turn by +DEG and back (-DEG
+                        near a limit), WHERE polled during every move; prints what the
+                        controller did, the round-trip times and whether the dialect works.
+                        DEG is 0.1 to 10.
+  --model FILE          joint limits to respect in the move test (a model file)
+  --i-have-cleared-the-cell   required with --move-test: the arm will move. Clear the cell,
+                        detach the ball-bar, keep a hand on the E-stop.
 )";
 
 void applyPort(drivers::SerialConfig& serial, const std::string& port) {
@@ -57,10 +69,45 @@ void report(const drivers::Diagnosis& d) {
   }
 }
 
+void printJoints(const char* label, const drivers::Joints6& joints_deg) {
+  std::printf("%s", label);
+  for (double v : joints_deg) std::printf(" %9.3f", v);
+  std::printf("\n");
+}
+
+// The move test: each joint out and back, and what was seen. True when the dialect works.
+bool moveTest(boost::asio::io_context& io, const drivers::ValConfig& config,
+              const drivers::MoveTestOptions& options) {
+  std::printf("Move test: SPEED %.0f, each joint by %.3f deg and back\n", options.speed_percent,
+              options.step_deg);
+  std::fflush(stdout);
+  drivers::ValController val(io, config);
+  try {
+    val.connect();
+  } catch (const drivers::DriverError& e) {
+    std::printf("  PROBLEM: %s\n", e.what());
+    return false;
+  }
+  const drivers::MoveTestReport r = drivers::runMoveTest(val, options, [](const std::string& s) {
+    std::printf("  %s\n", s.c_str());
+    std::fflush(stdout);
+  });
+  printJoints("  start joints (deg):", r.start_deg);
+  if (!r.where_round_trip_s.empty()) {
+    std::vector<double> t = r.where_round_trip_s;
+    std::sort(t.begin(), t.end());
+    std::printf("  WHERE round trip: median %.3f s, max %.3f s (%zu)\n", t[t.size() / 2], t.back(),
+                t.size());
+  }
+  std::printf("  %s: %s\n", r.ok ? "OK" : "PROBLEM", r.verdict.c_str());
+  return r.ok;
+}
+
 int run(const std::vector<std::string>& argv) {
-  const Args args(
-      argv, {"val", "bar", "config", "val-baud", "bar-baud", "bar-mode", "bar-format", "seconds"},
-      {"help"});
+  const Args args(argv,
+                  {"val", "bar", "config", "val-baud", "bar-baud", "bar-mode", "bar-format",
+                   "seconds", "move-test", "model"},
+                  {"help", "i-have-cleared-the-cell"});
   if (args.flag("help")) {
     std::printf(kHelp, build::kDaemonConfigFile);
     return 0;
@@ -82,6 +129,29 @@ int run(const std::vector<std::string>& argv) {
   config.bar.format = args.get("bar-format", config.bar.format);
   const double seconds = args.number("seconds", 3);
   if (seconds < 0 || seconds > 3600) throw UsageError("--seconds must be 0 to 3600");
+  drivers::MoveTestOptions move_test;
+  const bool do_move_test = args.has("move-test");
+  if (do_move_test) {
+    move_test.step_deg = args.number("move-test", 2);
+    if (!(move_test.step_deg >= 0.1 && move_test.step_deg <= 10))
+      throw UsageError("--move-test: DEG must be 0.1 to 10 (a small move per joint)");
+    if (!args.flag("i-have-cleared-the-cell"))
+      throw UsageError(
+          "--move-test moves the arm: every joint in turn by " +
+          drivers::formatFixed(move_test.step_deg, 3) +
+          " deg and back at SPEED 10. Clear the cell, detach the ball-bar, keep a hand on the "
+          "E-stop, then add --i-have-cleared-the-cell. Nothing was sent to the controller.");
+    if (args.has("bar")) throw UsageError("--move-test is for the controller only: drop --bar");
+    do_bar = false;
+    do_val = true;
+    if (args.has("model")) {
+      const Model model = loadModelFile(args.get("model", ""));
+      for (int k = 0; k < 6; ++k) {
+        move_test.min_deg[k] = model.joints[k].min_deg;
+        move_test.max_deg[k] = model.joints[k].max_deg;
+      }
+    }
+  }
   try {
     drivers::validate(config.val);
     drivers::validate(config.bar);
@@ -100,17 +170,13 @@ int run(const std::vector<std::string>& argv) {
     std::fflush(stdout);
     const drivers::Diagnosis d = drivers::diagnoseVal(io, config.val);
     if (d.where) {
-      std::printf("  joints (deg):");
-      for (double v : d.where->joints_deg) std::printf(" %9.3f", v);
-      std::printf("\n");
-      if (d.where->location) {
-        std::printf("  X Y Z (mm), O A T (deg):");
-        for (double v : *d.where->location) std::printf(" %9.3f", v);
-        std::printf("\n");
-      }
+      printJoints("  joints (deg):", d.where->joints_deg);
+      if (d.where->location) printJoints("  X Y Z (mm), O A T (deg):", *d.where->location);
     }
     report(d);
     ok = ok && d.verdict == drivers::Verdict::kOk;
+    // The arm moves only after the link and the dialect answered properly.
+    if (do_move_test) ok = ok && moveTest(io, config.val, move_test);
   }
   if (do_bar) {
     const auto& s = config.bar.serial;

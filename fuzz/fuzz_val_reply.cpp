@@ -1,8 +1,10 @@
-// The VAL II monitor's replies as the serial port delivers them: the reply collector (echo,
-// prompt, error lines `*...*`), controller error classification and the WHERE parser.
-// Documented errors: ProtocolError from parseWhere, the ControllerError family from throwError.
-// Properties: every collected error message throws the ControllerError subtype its
-// classification names; parsed WHERE joints are finite.
+// The VAL II monitor's replies as the serial port delivers them, in each dialect preset (val2,
+// vplus, kawasaki-as, chosen by the input's length): the reply collector (echo behind any prompt,
+// error lines, ignored completion lines, questions), error classification by severity and the
+// WHERE parser. Documented errors: ProtocolError from parseWhere, the ControllerError family
+// from throwError. Properties: every collected error message throws the ControllerError subtype
+// its classification names; the most severe error is at least as severe as every other; a
+// reply ended by a question has no prompt; parsed WHERE joints are finite.
 #include "fuzz_common.hpp"
 
 #include <robocal/drivers/errors.hpp>
@@ -13,9 +15,26 @@ using robocal::fuzz::check;
 
 namespace {
 
+const ValDialect* current = nullptr;
+
 const ValDialect& dialect() {
-  static const ValDialect d{ValConfig{}};
-  return d;
+  return *current;
+}
+
+const ValDialect& presetFor(std::size_t size) {
+  static const std::vector<ValDialect> all = [] {
+    std::vector<ValDialect> out;
+    for (const auto& name : valPresetNames()) out.emplace_back(valPreset(name));
+    return out;
+  }();
+  return all[size % all.size()];
+}
+
+void severity(const std::vector<std::string>& errors) {
+  if (errors.empty()) return;
+  const ValErrorKind worst = dialect().classify(dialect().mostSevere(errors));
+  for (const auto& m : errors)
+    check(worst <= dialect().classify(m), "mostSevere missed a more severe error", m);
 }
 
 void where(const std::vector<std::string>& lines) {
@@ -46,11 +65,17 @@ void error(const std::string& message) {
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   return robocal::fuzz::guarded(data, size, [](const std::string& bytes) {
+    current = &presetFor(bytes.size());
     // As the driver sees it: the reply to WHERE, fed whole and then in small pieces.
     ValReplyCollector whole(dialect(), "WHERE");
     whole.feed(bytes);
+    whole.quiet();
     if (whole.complete()) where(whole.lines());
     for (const auto& m : whole.errors()) error(m);
+    severity(whole.errors());
+    if (!whole.question().empty())
+      check(whole.prompt().empty() && dialect().isQuestion(whole.question()),
+            "a question that is a prompt, or not a question", whole.question());
 
     ValReplyCollector pieces(dialect(), "WHERE");
     const std::size_t step = bytes.empty() ? 1 : 1 + static_cast<unsigned char>(bytes[0]) % 7;

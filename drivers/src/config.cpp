@@ -5,6 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <fstream>
 #include <regex>
 #include <set>
@@ -77,11 +78,58 @@ SerialConfig serialConfigFromJson(const json& j, const std::string& where) {
   return c;
 }
 
+std::vector<std::string> valPresetNames() {
+  return {"val2", "vplus", "kawasaki-as"};
+}
+
+ValConfig valPreset(const std::string& dialect) {
+  ValConfig c;  // val2: the member defaults
+  c.dialect = dialect;
+  if (dialect == "val2") return c;
+  if (dialect == "vplus") {
+    // Adept V+ hosts end commands with CR LF and read up to the "." prompt (hardware.md).
+    c.send_line_ending = "\r\n";
+    return c;
+  }
+  if (dialect == "kawasaki-as") {
+    // Kawasaki AS (hardware.md, "descendant (AS)"): prompt ">", JMOVE, "(P1000)..." error lines,
+    // WHERE with the joint block first and units in the location headers.
+    c.prompt = {">"};
+    c.move_joints_command = "DO JMOVE #PPOINT({j1},{j2},{j3},{j4},{j5},{j6})";
+    c.error_regex = R"(^\s*(\([A-Z]?\d+\)\s*\S.*?)\s*$)";
+    c.where_joints_first = true;
+    c.location_headers = {"X[mm]", "Y[mm]", "Z[mm]", "O[deg]", "A[deg]", "T[deg]"};
+    return c;
+  }
+  std::string names;
+  for (const auto& n : valPresetNames()) names += (names.empty() ? "" : ", ") + n;
+  throw ConfigError("val.dialect: unknown dialect '" + dialect + "' (" + names + ")");
+}
+
 ValConfig valConfigFromJson(const json& j, const std::string& where) {
-  ValConfig c;
   ObjectReader r = objectReader(j, where);
+  std::string dialect = "val2";
+  r.get("dialect", dialect);
+  ValConfig c;
+  try {
+    c = valPreset(dialect);
+  } catch (const ConfigError&) {
+    throw ConfigError(where + ".dialect: unknown dialect '" + dialect +
+                      "' (val2, vplus or kawasaki-as)");
+  }
   if (const json* s = r.find("serial")) c.serial = serialConfigFromJson(*s, where + ".serial");
-  r.get("prompt", c.prompt);
+  // One prompt as a string (older files) or the list of them.
+  if (const json* p = r.find("prompt")) {
+    if (p->is_string())
+      c.prompt = {p->get<std::string>()};
+    else if (p->is_array() &&
+             std::all_of(p->begin(), p->end(), [](const json& e) { return e.is_string(); }))
+      c.prompt = p->get<std::vector<std::string>>();
+    else
+      throw ConfigError(where +
+                        ".prompt: expected a string or a list of strings, like [\".\", "
+                        "\"*\"]");
+  }
   r.get("send_line_ending", c.send_line_ending);
   r.get("move_joints_command", c.move_joints_command);
   r.get("where_command", c.where_command);
@@ -91,12 +139,16 @@ ValConfig valConfigFromJson(const json& j, const std::string& where) {
   r.get("error_regex", c.error_regex);
   r.get("power_off_regex", c.power_off_regex);
   r.get("out_of_range_regex", c.out_of_range_regex);
+  r.get("ignore_regex", c.ignore_regex);
+  r.get("question_regex", c.question_regex);
+  r.get("where_joints_first", c.where_joints_first);
   r.get("location_headers", c.location_headers);
   r.get("joint_headers", c.joint_headers);
   r.get("connect_timeout_s", c.connect_timeout_s);
   r.get("command_timeout_s", c.command_timeout_s);
   r.get("where_timeout_s", c.where_timeout_s);
   r.get("move_timeout_s", c.move_timeout_s);
+  r.get("slowest_joint_speed_deg_s", c.slowest_joint_speed_deg_s);
   r.get("abort_timeout_s", c.abort_timeout_s);
   r.get("poll_interval_s", c.poll_interval_s);
   r.get("at_target_tol_deg", c.at_target_tol_deg);
@@ -111,7 +163,13 @@ ValConfig valConfigFromJson(const json& j, const std::string& where) {
 }
 
 void validate(const ValConfig& c, const std::string& where) {
-  if (c.prompt.empty()) throw ConfigError(where + ".prompt: must not be empty");
+  const auto presets = valPresetNames();
+  if (std::find(presets.begin(), presets.end(), c.dialect) == presets.end())
+    throw ConfigError(where + ".dialect: unknown dialect '" + c.dialect +
+                      "' (val2, vplus or kawasaki-as)");
+  if (c.prompt.empty()) throw ConfigError(where + ".prompt: must list at least one prompt");
+  for (const auto& p : c.prompt)
+    if (trim(p).empty()) throw ConfigError(where + ".prompt: a prompt must not be empty or blank");
   if (c.send_line_ending.empty())
     throw ConfigError(where + ".send_line_ending: must not be empty (\"\\r\" or \"\\r\\n\")");
   const std::set<std::string> joints{"j1", "j2", "j3", "j4", "j5", "j6"};
@@ -140,6 +198,8 @@ void validate(const ValConfig& c, const std::string& where) {
   checkRegex(c.error_regex, where + ".error_regex", 1);
   checkRegex(c.power_off_regex, where + ".power_off_regex", 0);
   checkRegex(c.out_of_range_regex, where + ".out_of_range_regex", 0);
+  checkRegex(c.ignore_regex, where + ".ignore_regex", 0);
+  checkRegex(c.question_regex, where + ".question_regex", 0);
   if (c.location_headers.size() != 6)
     throw ConfigError(where + ".location_headers: must name 6 columns (X Y Z O A T)");
   if (c.joint_headers.size() != 6)
@@ -148,6 +208,7 @@ void validate(const ValConfig& c, const std::string& where) {
   checkPositive(c.command_timeout_s, where + ".command_timeout_s");
   checkPositive(c.where_timeout_s, where + ".where_timeout_s");
   checkPositive(c.move_timeout_s, where + ".move_timeout_s");
+  checkPositive(c.slowest_joint_speed_deg_s, where + ".slowest_joint_speed_deg_s");
   checkPositive(c.abort_timeout_s, where + ".abort_timeout_s");
   checkPositive(c.poll_interval_s, where + ".poll_interval_s");
   checkPositive(c.at_target_tol_deg, where + ".at_target_tol_deg");
@@ -277,6 +338,7 @@ json toJson(const SerialConfig& c) {
 
 json toJson(const ValConfig& c) {
   return json{{"serial", toJson(c.serial)},
+              {"dialect", c.dialect},
               {"prompt", c.prompt},
               {"send_line_ending", c.send_line_ending},
               {"move_joints_command", c.move_joints_command},
@@ -287,12 +349,16 @@ json toJson(const ValConfig& c) {
               {"error_regex", c.error_regex},
               {"power_off_regex", c.power_off_regex},
               {"out_of_range_regex", c.out_of_range_regex},
+              {"ignore_regex", c.ignore_regex},
+              {"question_regex", c.question_regex},
+              {"where_joints_first", c.where_joints_first},
               {"location_headers", c.location_headers},
               {"joint_headers", c.joint_headers},
               {"connect_timeout_s", c.connect_timeout_s},
               {"command_timeout_s", c.command_timeout_s},
               {"where_timeout_s", c.where_timeout_s},
               {"move_timeout_s", c.move_timeout_s},
+              {"slowest_joint_speed_deg_s", c.slowest_joint_speed_deg_s},
               {"abort_timeout_s", c.abort_timeout_s},
               {"poll_interval_s", c.poll_interval_s},
               {"at_target_tol_deg", c.at_target_tol_deg},

@@ -1,5 +1,7 @@
 #include <robocal/drivers/diagnose.hpp>
 
+#include <algorithm>
+
 namespace robocal::drivers {
 
 const char* verdictName(Verdict v) {
@@ -16,6 +18,8 @@ const char* verdictName(Verdict v) {
       return "unparseable answer";
     case Verdict::kDeviceError:
       return "device error";
+    case Verdict::kQuestion:
+      return "controller asks a question";
   }
   return "?";
 }
@@ -32,6 +36,20 @@ std::string joinLines(const std::vector<std::string>& lines) {
   std::string out;
   for (const auto& l : lines) out += "\n    " + l;
   return out;
+}
+
+// The controller waits for an answer: the operator gives it, never robocal.
+Diagnosis asking(const std::string& port, const std::string& question,
+                 const std::string& received) {
+  return {Verdict::kQuestion,
+          "The controller on " + port + " is asking \"" + question +
+              "\" instead of showing its prompt: it has just been switched on, or a command "
+              "(HERE, POINT) waits for an answer. Answer it on the controller's own terminal (or "
+              "with `robocal term --val " +
+              port + "`); robocal never answers a question for you. Then probe again.",
+          received,
+          {},
+          {}};
 }
 
 }  // namespace
@@ -54,7 +72,16 @@ Diagnosis diagnoseVal(boost::asio::io_context& io, const ValConfig& config) {
     try {
       link.write(config.send_line_ending, deadline);
       std::string chunk;
-      while (!wake.complete() && link.readSome(chunk, deadline)) {
+      // A tentative prompt ("*") ends the wake-up once the line has been quiet a moment.
+      while (!wake.complete()) {
+        const auto until =
+            wake.tentative()
+                ? std::min(deadline, Clock::now() + std::chrono::milliseconds(kPromptQuietMs))
+                : deadline;
+        if (!link.readSome(chunk, until)) {
+          wake.quiet();
+          break;
+        }
         wake.feed(chunk);
         chunk.clear();
       }
@@ -62,13 +89,15 @@ Diagnosis diagnoseVal(boost::asio::io_context& io, const ValConfig& config) {
       return {Verdict::kNoPort, e.what(), "", {}, {}};
     }
     d.received = escapeBytes(wake.raw().substr(0, 200));
+    if (!wake.question().empty()) return asking(port, wake.question(), d.received);
     if (!wake.complete()) {
       if (wake.raw().empty())
         return {Verdict::kNoAnswer,
                 "Nothing came back from the controller on " + port + " within " +
                     formatFixed(config.connect_timeout_s, 1) +
-                    " s. Check that the controller is switched on and shows its '" + config.prompt +
-                    "' prompt on its own terminal, that the cable goes into its terminal (TTY) "
+                    " s. Check that the controller is switched on and shows its prompt (" +
+                    dialect.describePrompts() +
+                    ") on its own terminal, that the cable goes into its terminal (TTY) "
                     "port and is a null-modem cable, and that it runs at " +
                     settings(config.serial) + ".",
                 "",
@@ -86,8 +115,10 @@ Diagnosis diagnoseVal(boost::asio::io_context& io, const ValConfig& config) {
                 {},
                 {}};
       return {Verdict::kUnparseable,
-              "The controller on " + port + " answers, but never shows the prompt '" +
-                  config.prompt + "' robocal waits for. Set val.prompt to what it shows.",
+              "The controller on " + port +
+                  " answers, but never shows a prompt robocal waits for (" +
+                  dialect.describePrompts() +
+                  "). Add what it shows to val.prompt, or choose its val.dialect.",
               d.received,
               {},
               {}};
@@ -100,6 +131,8 @@ Diagnosis diagnoseVal(boost::asio::io_context& io, const ValConfig& config) {
     val.connect();
     lines = val.command(config.where_command, config.where_timeout_s);
     d.where = parseWhere(lines, config);
+  } catch (const QuestionError& e) {
+    return asking(port, e.controllerMessage(), "");
   } catch (const ControllerError& e) {
     return {Verdict::kDeviceError,
             "The controller on " + port + " refused \"" + config.where_command +

@@ -231,7 +231,9 @@ ValDialect::ValDialect(ValConfig config)
     : config_(std::move(config)),
       error_re_(compile(config_.error_regex, false, "val.error_regex")),
       power_off_re_(compile(config_.power_off_regex, true, "val.power_off_regex")),
-      out_of_range_re_(compile(config_.out_of_range_regex, true, "val.out_of_range_regex")) {}
+      out_of_range_re_(compile(config_.out_of_range_regex, true, "val.out_of_range_regex")),
+      ignore_re_(compile(config_.ignore_regex, true, "val.ignore_regex")),
+      question_re_(compile(config_.question_regex, false, "val.question_regex")) {}
 
 std::string ValDialect::moveCommand(const Joints6& j) const {
   std::map<std::string, std::string> fields;
@@ -265,6 +267,13 @@ ValErrorKind ValDialect::classify(const std::string& message) const {
   return ValErrorKind::kOther;
 }
 
+const std::string& ValDialect::mostSevere(const std::vector<std::string>& messages) const {
+  const std::string* best = &messages.front();
+  for (const auto& m : messages)
+    if (classify(m) < classify(*best)) best = &m;
+  return *best;
+}
+
 void ValDialect::throwError(const std::string& command, const std::string& message) const {
   const std::string what = "the controller refused \"" + command + "\": " + message;
   switch (classify(message)) {
@@ -280,7 +289,42 @@ void ValDialect::throwError(const std::string& command, const std::string& messa
 }
 
 bool ValDialect::isPrompt(std::string_view text) const {
-  return trim(text) == trim(config_.prompt);
+  const std::string t = trim(text);
+  for (const auto& p : config_.prompt)
+    if (t == trim(p)) return true;
+  return false;
+}
+
+bool ValDialect::isPromptThen(const std::string& line, const std::string& rest) const {
+  const std::string t = trim(line);
+  for (const auto& p : config_.prompt) {
+    const std::string prompt = trim(p);
+    if (t.size() > prompt.size() && t.compare(0, prompt.size(), prompt) == 0 &&
+        trim(t.substr(prompt.size())) == rest)
+      return true;
+  }
+  return false;
+}
+
+bool ValDialect::couldStartError(std::string_view prompt) const {
+  return std::regex_match(trim(prompt) + "Arm power off", error_re_);
+}
+
+bool ValDialect::isIgnored(const std::string& line) const {
+  return !config_.ignore_regex.empty() && line.size() <= kMaxRegexLineBytes &&
+         std::regex_search(line, ignore_re_);
+}
+
+bool ValDialect::isQuestion(std::string_view text) const {
+  const std::string t = trim(text);
+  return !t.empty() && t.size() <= kMaxRegexLineBytes && !isPrompt(t) &&
+         std::regex_search(t, question_re_);
+}
+
+std::string ValDialect::describePrompts() const {
+  std::string out;
+  for (const auto& p : config_.prompt) out += (out.empty() ? "'" : " or '") + p + "'";
+  return out;
 }
 
 std::string ValDialect::formatError(const std::string& message) {
@@ -308,9 +352,28 @@ bool ValReplyCollector::feed(std::string_view bytes) {
   }
   // A prompt without a line ending ends the reply once a line has ended since the command was
   // sent: before that it may be the prompt the controller echoes in front of the command.
+  tentative_ = false;
   if (!complete_ && (line_endings_ > 0 || command_.empty()) &&
-      dialect_.isPrompt(splitter_.pending()))
+      dialect_.isPrompt(splitter_.pending())) {
+    prompt_ = trim(splitter_.pending());
+    if (dialect_.couldStartError(prompt_))
+      tentative_ = true;  // "*" now, "*Arm power off*" a byte later?
+    else
+      complete_ = true;
+  }
+  // A question waits for an answer with no line ending after it; nothing else will come.
+  if (!complete_ && dialect_.isQuestion(splitter_.pending())) {
+    question_ = trim(splitter_.pending());
     complete_ = true;
+  }
+  return complete_;
+}
+
+bool ValReplyCollector::quiet() {
+  if (tentative_) {
+    complete_ = true;
+    tentative_ = false;
+  }
   return complete_;
 }
 
@@ -320,17 +383,22 @@ void ValReplyCollector::line(const std::string& text) {
   if (dialect_.isPrompt(t)) {
     // A prompt alone on a line ends the reply unless it is the very first line: that is the
     // previous command's prompt (a controller that ends its prompt with a line ending).
-    if (echo_seen_ || line_endings_ > 1 || command_.empty()) complete_ = true;
+    if (echo_seen_ || line_endings_ > 1 || command_.empty()) {
+      prompt_ = t;
+      complete_ = true;
+    }
     return;
   }
   if (!echo_seen_) {
-    const std::string prompt = trim(dialect_.config().prompt);
-    std::string u = toUpper(t);
-    if (u.rfind(prompt, 0) == 0 && trim(u.substr(prompt.size())) == command_) u = command_;
-    if (u == command_) {
+    const std::string u = toUpper(t);
+    if (u == command_ || dialect_.isPromptThen(u, command_)) {
       echo_seen_ = true;
       return;
     }
+  }
+  if (dialect_.isIgnored(t)) {
+    ++ignored_;
+    return;
   }
   if (auto msg = dialect_.errorMessage(t)) {
     errors_.push_back(*msg);
@@ -448,7 +516,7 @@ std::vector<std::string> formatWhere(const ValConfig& config, const WhereLayout&
                     ' ');
     return out + s;
   };
-  std::string h1, v1, h2, v2;
+  std::string h1, v1, h2, v2;  // location block, joint block
   for (int k = 0; k < 6; ++k) {
     h1 += cell(config.location_headers[k]);
     v1 += cell(formatFixed(location[k], layout.decimals));
@@ -459,6 +527,7 @@ std::vector<std::string> formatWhere(const ValConfig& config, const WhereLayout&
     h1 += cell("HAND");
     if (!layout.hand_blank) v1 += cell(formatFixed(0, layout.decimals));
   }
+  if (layout.joints_first) return {h2, v2, h1, v1};
   return {h1, v1, h2, v2};
 }
 

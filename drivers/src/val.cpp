@@ -24,6 +24,10 @@ double maxAbsDiff(const Joints6& a, const Joints6& b) {
   return m;
 }
 
+double secondsSince(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
 Clock::duration seconds(double s) {
   return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
 }
@@ -94,7 +98,8 @@ ValController::ValController(boost::asio::io_context& io, ValConfig config)
       dialect_(std::move(config)),
       link_(io, dialect_.config().serial),
       timer_(io),
-      poll_timer_(io) {
+      poll_timer_(io),
+      quiet_timer_(io) {
   validate(dialect_.config());
 }
 
@@ -138,6 +143,7 @@ void ValController::disconnect() {
   alive_.reset();  // orphans every pending handler
   timer_.cancel();
   poll_timer_.cancel();
+  quiet_timer_.cancel();
   link_.close();
   const auto fail = [](std::unique_ptr<Exchange>& x) {
     if (x && x->handler)
@@ -166,11 +172,26 @@ void ValController::received(std::string_view bytes) {
     unsolicited(bytes);
     return;
   }
-  if (!current_->collector.feed(bytes)) return;
+  if (current_->collector.feed(bytes)) return replyComplete();
+  if (current_->collector.tentative()) waitPromptQuiet(exchange_id_);
+}
+
+void ValController::replyComplete() {
   // What followed the reply in the same read was printed after it: an error there (an E-stop)
   // is reported with this reply rather than lost.
   unsolicited(current_->collector.rest());
   finish(nullptr);
+}
+
+// A "*" at the end may be the busy prompt or the start of "*Arm power off*": the reply ends
+// when nothing more comes for kPromptQuietMs (a new byte re-arms or settles it).
+void ValController::waitPromptQuiet(std::uint64_t id) {
+  std::weak_ptr<int> alive = alive_;
+  quiet_timer_.expires_after(std::chrono::milliseconds(kPromptQuietMs));
+  quiet_timer_.async_wait([this, alive, id](const boost::system::error_code& ec) {
+    if (ec || alive.expired() || !current_ || exchange_id_ != id) return;
+    if (current_->collector.quiet()) replyComplete();
+  });
 }
 
 void ValController::unsolicited(std::string_view bytes) {
@@ -178,6 +199,10 @@ void ValController::unsolicited(std::string_view bytes) {
   unsolicited_splitter_.feed(bytes, lines);
   for (const auto& l : lines) {
     if (trim(l).empty()) continue;
+    if (dialect_.isIgnored(trim(l))) {
+      ++stats_.ignored_lines;
+      continue;
+    }
     ++stats_.unsolicited_lines;
     if (auto msg = dialect_.errorMessage(trim(l))) {
       pending_errors_.push_back(*msg);
@@ -257,26 +282,44 @@ void ValController::send() {
     ++stats_.timeouts;
     out_of_sync_ = true;
     const ValReplyCollector& reply = current_->collector;
-    const std::string& text = current_->text;
-    std::string what = "no answer from the controller on " + link_.describe() + " to \"" + text +
-                       "\" within " + formatFixed(current_->timeout_s, 1) + " s";
-    if (reply.raw().empty())
-      what += ": is it powered on and at the monitor prompt '" + dialect_.config().prompt +
-              "', the cable a null-modem one, and the baud rate right?";
-    else if (!looksLikeText(reply.raw()))
-      what += ": it sent bytes that are not text (" + escapeBytes(reply.raw().substr(0, 40)) +
-              "): wrong baud rate or parity, or a garbling USB adapter";
-    else
-      what += ": it sent \"" + escapeBytes(reply.raw().substr(0, 120)) +
-              "\" but no prompt: is the prompt configured right (val.prompt)?";
-    finish(errorPtr(TimeoutError(what)));
+    finish(errorPtr(CommandTimeoutError(describeTimeout(current_->text, current_->timeout_s, reply),
+                                        reply.echoSeen())));
   });
+}
+
+// What was seen, in the order a technician checks it; advice only where it fits.
+std::string ValController::describeTimeout(const std::string& command, double timeout_s,
+                                           const ValReplyCollector& reply) const {
+  std::string what = "no answer from the controller on " + link_.describe() + " to \"" + command +
+                     "\" within " + formatFixed(timeout_s, 1) + " s";
+  const std::string& raw = reply.raw();
+  if (raw.empty())
+    return what + ": nothing came back. Is it powered on and at the monitor prompt (" +
+           dialect_.describePrompts() + "), the cable a null-modem one, and the baud rate right?";
+  if (!looksLikeText(raw))
+    return what + ": it sent bytes that are not text (" + escapeBytes(raw.substr(0, 40)) +
+           "): wrong baud rate or parity, or a garbling USB adapter";
+  what += ": it sent \"" + escapeBytes(raw.substr(0, 120)) + "\"";
+  // The last text without a line ending is what the terminal shows now.
+  std::string last =
+      raw.substr(raw.find_last_of("\r\n") == std::string::npos ? 0 : raw.find_last_of("\r\n") + 1);
+  last = trim(last);
+  if (!last.empty() && last.size() <= 4)
+    return what + "; it shows '" + last + "', which is not one of the configured prompts (" +
+           dialect_.describePrompts() + "): if that is its prompt, add it to val.prompt";
+  if (reply.echoSeen())
+    return what + "; the command was echoed, then no prompt (" + dialect_.describePrompts() +
+           ") came back";
+  return what + "; no echo of the command and no prompt (" + dialect_.describePrompts() + ")";
 }
 
 void ValController::finish(std::exception_ptr error) {
   timer_.cancel();
+  quiet_timer_.cancel();
   std::unique_ptr<Exchange> x = std::move(current_);
   std::vector<std::string> lines;
+  stats_.ignored_lines += x->collector.ignored();
+  if (!error) last_prompt_ = x->collector.prompt();
   if (!error) {
     std::vector<std::string> errors = std::move(pending_errors_);
     pending_errors_.clear();
@@ -285,10 +328,18 @@ void ValController::finish(std::exception_ptr error) {
       ++stats_.controller_errors;
       out_of_sync_ = true;  // an unsolicited error may have cut a reply short: drain first
       try {
-        dialect_.throwError(x->text, errors.front());
+        dialect_.throwError(x->text, dialect_.mostSevere(errors));
       } catch (...) {
         error = std::current_exception();
       }
+    } else if (!x->collector.question().empty()) {
+      out_of_sync_ = true;
+      const std::string& q = x->collector.question();
+      error = errorPtr(QuestionError(
+          "the controller on " + link_.describe() + " asks \"" + q + "\" instead of showing its " +
+              "prompt (" + dialect_.describePrompts() + "): answer it on the controller's own " +
+              "terminal (robocal never answers a question for you), then try again",
+          q));
     } else {
       lines = x->collector.lines();
     }
@@ -325,8 +376,12 @@ std::vector<std::string> ValController::command(const std::string& text, double 
 }
 
 void ValController::asyncWhere(WhereHandler handler) {
+  asyncWhere(dialect_.config().where_timeout_s, std::move(handler));
+}
+
+void ValController::asyncWhere(double timeout_s, WhereHandler handler) {
   asyncCommand(
-      dialect_.config().where_command, dialect_.config().where_timeout_s,
+      dialect_.config().where_command, timeout_s,
       [this, handler = std::move(handler)](std::exception_ptr e, std::vector<std::string> lines) {
         if (e) return handler(e, {});
         WhereReply w;
@@ -335,6 +390,7 @@ void ValController::asyncWhere(WhereHandler handler) {
         } catch (...) {
           return handler(std::current_exception(), {});
         }
+        last_joints_ = w.joints_deg;
         handler(nullptr, w);
       });
 }
@@ -349,6 +405,14 @@ void ValController::setSpeed(double percent) {
     throw DriverError("speed must be more than 0 and at most 100 percent, not " +
                       formatFixed(percent, 2));
   command(dialect_.speedCommand(percent), dialect_.config().command_timeout_s);
+  speed_percent_ = percent;
+}
+
+double ValController::moveCommandTimeout(const Joints6& target) const {
+  const ValConfig& c = dialect_.config();
+  if (!last_joints_ || !speed_percent_) return std::max(c.move_timeout_s, c.motion_timeout_s);
+  const double speed_deg_s = c.slowest_joint_speed_deg_s * *speed_percent_ / 100.0;
+  return c.move_timeout_s + maxAbsDiff(target, *last_joints_) / speed_deg_s;
 }
 
 void ValController::abort() {
@@ -359,22 +423,28 @@ void ValController::abort() {
 void ValController::startMove(const Joints6& target) {
   for (double v : target)
     if (!std::isfinite(v)) throw DriverError("move target has a joint angle that is not a number");
-  command(dialect_.moveCommand(target), dialect_.config().move_timeout_s);
+  command(dialect_.moveCommand(target), moveCommandTimeout(target));
 }
 
 void ValController::pollMotion(std::shared_ptr<MotionMonitor> monitor, Joints6 target,
-                               WhereHandler handler, ProgressHandler progress) {
+                               WhereHandler handler, ProgressHandler progress,
+                               double where_timeout_s) {
   ++stats_.where_polls;
   std::weak_ptr<int> alive = alive_;
-  asyncWhere([this, alive, monitor, target, handler, progress](std::exception_ptr e, WhereReply w) {
+  const double retry_timeout_s = dialect_.config().where_timeout_s;
+  asyncWhere(where_timeout_s, [this, alive, monitor, target, handler, progress, retry_timeout_s](
+                                  std::exception_ptr e, WhereReply w) {
     if (e) {
-      // A garbled or cut WHERE reply is asked again (where_retries in a row) before giving up.
+      // A garbled or cut WHERE reply is asked again (where_retries in a row) before giving up,
+      // after the line has been quiet: the rest of the bad reply (or a completion line) is
+      // drained rather than read as the next reply.
       try {
         std::rethrow_exception(e);
       } catch (const ProtocolError&) {
         if (++monitor->unreadable <= dialect_.config().where_retries && !alive.expired()) {
           ++stats_.where_retries;
-          return pollMotion(monitor, target, handler, progress);
+          out_of_sync_ = true;
+          return pollMotion(monitor, target, handler, progress, retry_timeout_s);
         }
       } catch (...) {
       }
@@ -392,7 +462,7 @@ void ValController::pollMotion(std::shared_ptr<MotionMonitor> monitor, Joints6 t
         [this, alive, monitor, target, handler, progress](const boost::system::error_code& ec) {
           if (alive.expired()) return;
           if (ec) return handler(errorPtr(MotionError("waiting for the motion was cancelled")), {});
-          pollMotion(monitor, target, handler, progress);
+          pollMotion(monitor, target, handler, progress, dialect_.config().where_timeout_s);
         });
   });
 }
@@ -406,20 +476,36 @@ void ValController::asyncMoveJoints(const Joints6& target, WhereHandler handler,
       });
       return;
     }
-  asyncCommand(dialect_.moveCommand(target), dialect_.config().move_timeout_s,
-               [this, target, handler, progress](std::exception_ptr e, std::vector<std::string>) {
-                 if (e) return handler(e, {});
-                 pollMotion(
-                     std::make_shared<MotionMonitor>(dialect_.config(), target, Clock::now()),
-                     target, handler, progress);
-               });
+  const auto start = Clock::now();
+  asyncCommand(
+      dialect_.moveCommand(target), moveCommandTimeout(target),
+      [this, target, handler, progress, start](std::exception_ptr e, std::vector<std::string>) {
+        const ValConfig& c = dialect_.config();
+        double first_where_s = c.where_timeout_s;
+        if (e) {
+          // Echoed, then no prompt in time: the controller may be busy with the move itself
+          // (a synchronous DO MOVE). The motion monitor decides, from WHERE, not the prompt.
+          try {
+            std::rethrow_exception(e);
+          } catch (const CommandTimeoutError& t) {
+            if (!t.echoSeen()) return handler(e, {});
+            ++stats_.move_timeouts_watched;
+            first_where_s = std::max(c.where_timeout_s,
+                                     c.motion_timeout_s - secondsSince(start) + c.where_timeout_s);
+          } catch (...) {
+            return handler(e, {});
+          }
+        }
+        pollMotion(std::make_shared<MotionMonitor>(c, target, start), target, handler, progress,
+                   first_where_s);
+      });
 }
 
 WhereReply ValController::waitForMotion(const Joints6& target, const ProgressHandler& progress) {
   return runSync<WhereReply>(
       [&](WhereHandler h) {
         pollMotion(std::make_shared<MotionMonitor>(dialect_.config(), target, Clock::now()), target,
-                   std::move(h), progress);
+                   std::move(h), progress, dialect_.config().where_timeout_s);
       },
       dialect_.config().motion_timeout_s + dialect_.config().where_timeout_s + 1);
 }
@@ -427,8 +513,8 @@ WhereReply ValController::waitForMotion(const Joints6& target, const ProgressHan
 WhereReply ValController::moveJoints(const Joints6& target, const ProgressHandler& progress) {
   return runSync<WhereReply>(
       [&](WhereHandler h) { asyncMoveJoints(target, std::move(h), progress); },
-      dialect_.config().move_timeout_s + dialect_.config().motion_timeout_s +
-          dialect_.config().where_timeout_s + 1);
+      moveCommandTimeout(target) + dialect_.config().motion_timeout_s +
+          2 * dialect_.config().where_timeout_s + 1);
 }
 
 }  // namespace robocal::drivers

@@ -1,4 +1,5 @@
 #include "cellsim.hpp"
+#include "val_texts.hpp"
 
 #include <robocal/drivers/errors.hpp>
 #include <robocal/drivers/transport.hpp>
@@ -198,6 +199,10 @@ class Cell {
         stream_timer_(io),
         start_time_(Clock::now()) {
     if (!o.bar_mode.empty()) bar_config_.mode = o.bar_mode;
+    where_layout_ = o.where_layout;
+    where_layout_.joints_first = config.val.where_joints_first;
+    completion_lines_ = o.val_completion_lines || isKawasaki(config.val.dialect);
+    val_asking_ = o.val_boot_question;
     drivers::validate(bar_config_);
     joints_ = o.start_joints_deg;
     speed_ = o.speed_percent;
@@ -286,7 +291,9 @@ class Cell {
       if (w[0] == "fault" && w.size() >= 2) {
         const std::string& f = w[1];
         const bool val = w.size() > 2 && w[2] == "val";
-        if (f == "garbage" && val)
+        if (f == "completion")  // a completion line inside the next WHERE reply
+          completion_next_ = true;
+        else if (f == "garbage" && val)
           val_garbage_next_ = true;
         else if (f == "drop" && val)
           val_drop_next_ = true;
@@ -307,7 +314,8 @@ class Cell {
         } else if (f == "disconnect" && w.size() >= 3) {
           disconnect(port(w[2]), seconds(3, o_.reconnect_after_s));
         } else {
-          return "error: unknown fault (garbage, drop, noprobe [off], loose [off], error [TEXT], "
+          return "error: unknown fault (garbage, drop, completion, noprobe [off], loose [off], "
+                 "error [TEXT], "
                  "stall val|bar "
                  "S, "
                  "disconnect val|bar S)";
@@ -424,6 +432,7 @@ class Cell {
       for (int i = 0; i < 6; ++i) joints_[i] = move_from_[i] + (target_[i] - move_from_[i]) * s;
       if (s >= 1.0) {
         moving_ = false;
+        motionEnded();
         // The ring starts when the motion ended, not at this tick.
         ring_t0_ = move_t0_ + toDuration(move_duration_s_);
         ring_mm_ = o_.settling.amplitudeFor(move_travel_mm_);
@@ -446,8 +455,34 @@ class Cell {
     estop_at_.reset();
     std::fprintf(stderr, "cellsim: E-STOP\n");
     if (Clock::now() >= val_stall_until_)
-      val_.write(o_.val_eol + drivers::ValDialect::formatError("Arm power off") + o_.val_eol +
-                 val_dialect_.config().prompt);
+      val_.write(o_.val_eol + valErrorLine(dialect(), ValFault::kPowerOff) + o_.val_eol +
+                 val_dialect_.idlePrompt());
+    val_busy_ = false;
+    typedAhead();
+  }
+
+  const std::string& dialect() const { return val_dialect_.config().dialect; }
+  const std::string& prompt() const {
+    return moving_ ? val_dialect_.busyPrompt() : val_dialect_.idlePrompt();
+  }
+
+  // A move ended: the completion line (AS), and a synchronous move's prompt at last, then the
+  // lines typed while it ran.
+  void motionEnded() {
+    if (completion_lines_) val_.write(o_.val_eol + kCompletionLine + o_.val_eol);
+    if (!val_busy_) return;
+    val_busy_ = false;
+    val_.write(o_.val_eol + val_dialect_.idlePrompt());
+    typedAhead();
+  }
+
+  void typedAhead() {
+    while (!val_busy_ && !val_typeahead_.empty() && val_.isOpen()) {
+      std::string line = std::move(val_typeahead_.front());
+      val_typeahead_.pop_front();
+      if (o_.val_echo) val_.write(line);
+      valLine(line);
+    }
   }
 
   Joints6 quantised() const {
@@ -493,6 +528,11 @@ class Cell {
         if (second_half) continue;
         std::string line = std::move(val_line_);
         val_line_.clear();
+        if (val_busy_) {  // a synchronous move runs: the monitor reads the line when it ends
+          val_typeahead_.push_back(std::move(line));
+          echo.clear();
+          continue;
+        }
         if (o_.val_echo) val_.write(std::move(echo));
         echo.clear();
         valLine(line);
@@ -503,15 +543,24 @@ class Cell {
         echo.push_back(c);
       }
     }
-    if (o_.val_echo) val_.write(std::move(echo));
+    if (o_.val_echo && !val_busy_) val_.write(std::move(echo));
   }
 
   void valLine(const std::string& raw) {
     const std::string line = drivers::trim(raw);
     const std::string& eol = o_.val_eol;
-    const std::string& prompt = val_dialect_.config().prompt;
+    if (val_asking_) {  // just booted: nothing but the answer is read
+      const std::string answer = drivers::toUpper(line);
+      if (answer == "Y" || answer == "N") {
+        val_asking_ = false;
+        val_.write(eol + val_dialect_.idlePrompt());
+      } else {
+        val_.write(eol + kBootQuestion);
+      }
+      return;
+    }
     if (line.empty()) {
-      val_.write(eol + prompt);
+      val_.write(eol + prompt());
       return;
     }
     ++val_commands_;
@@ -529,7 +578,7 @@ class Cell {
     if (o_.val_error_on_command > 0 && val_commands_ == o_.val_error_on_command)
       error_next_ = o_.val_error_text;
     if (!error_next_.empty()) {
-      lines.push_back(drivers::ValDialect::formatError(error_next_));
+      lines.push_back(valErrorLine(dialect(), error_next_));
       error_next_.clear();
     } else {
       lines = valCommand(line);
@@ -548,14 +597,20 @@ class Cell {
     }
     std::string out = eol;
     for (const auto& l : lines) out += l + eol;
-    val_.write(out + prompt);
+    val_.write(val_busy_ ? out : out + prompt());  // a synchronous move: no prompt yet
   }
 
   std::vector<std::string> valCommand(const std::string& line) {
-    using drivers::ValDialect;
     std::smatch m;
-    if (std::regex_match(line, m, where_re_))
-      return drivers::formatWhere(val_dialect_.config(), o_.where_layout, location(), quantised());
+    if (std::regex_match(line, m, where_re_)) {
+      auto lines =
+          drivers::formatWhere(val_dialect_.config(), where_layout_, location(), quantised());
+      if (completion_next_) {  // printed by the controller while it wrote the reply
+        completion_next_ = false;
+        lines.insert(lines.begin() + 1, kCompletionLine);
+      }
+      return lines;
+    }
     if (std::regex_match(line, m, abort_re_)) {
       moving_ = false;
       estop_at_.reset();
@@ -563,18 +618,18 @@ class Cell {
     }
     if (std::regex_match(line, m, speed_re_)) {
       const double s = std::stod(m[1].str());
-      if (!(s > 0 && s <= 100)) return {ValDialect::formatError("Invalid speed")};
+      if (!(s > 0 && s <= 100)) return {valErrorLine(dialect(), ValFault::kInvalidSpeed)};
       speed_ = s;
       return {};
     }
     if (std::regex_match(line, m, move_re_)) {
-      if (estop_) return {ValDialect::formatError("Arm power off")};
+      if (estop_) return {valErrorLine(dialect(), ValFault::kPowerOff)};
       Joints6 target{};
       for (std::size_t i = 0; i < move_fields_.size(); ++i)
         target[std::stoi(move_fields_[i].substr(1)) - 1] = std::stod(m[i + 1].str());
       for (int k = 0; k < 6; ++k)
         if (target[k] < truth_.joints[k].min_deg || target[k] > truth_.joints[k].max_deg)
-          return {ValDialect::formatError("Position out of range")};
+          return {valErrorLine(dialect(), ValFault::kOutOfRange)};
       ++moves_;
       move_from_ = joints_;
       target_ = target;
@@ -585,9 +640,10 @@ class Cell {
       move_t0_ = Clock::now();
       moving_ = true;
       if (o_.estop_on_move > 0 && moves_ == o_.estop_on_move) estop_at_ = move_duration_s_ / 2;
+      val_busy_ = o_.val_sync_moves && move_duration_s_ > 0;
       return {};
     }
-    return {ValDialect::formatError("Unknown command")};
+    return {valErrorLine(dialect(), ValFault::kUnknownCommand)};
   }
 
   // ------------------------------------------------------------------------------ ball-bar
@@ -660,7 +716,10 @@ class Cell {
     std::fprintf(stderr, "cellsim: %s disconnected for %.2f s\n", port.name().c_str(),
                  reconnect_after_s);
     port.close();
-    if (&port == &val_) val_line_.clear();
+    if (&port == &val_) {
+      val_line_.clear();
+      val_typeahead_.clear();
+    }
     auto timer = std::make_shared<asio::steady_timer>(io_, toDuration(reconnect_after_s));
     timer->async_wait([this, &port, timer](const boost::system::error_code& ec) {
       if (ec) return;
@@ -696,6 +755,11 @@ class Cell {
   std::vector<std::string> move_fields_;
   std::string val_line_;
   bool val_after_cr_ = false;
+  drivers::WhereLayout where_layout_;
+  bool completion_lines_ = false, completion_next_ = false;
+  bool val_busy_ = false;                  // a synchronous move runs
+  bool val_asking_ = false;                // the boot question is unanswered
+  std::deque<std::string> val_typeahead_;  // lines received while val_busy_
   long val_commands_ = 0;
   Clock::time_point val_stall_until_{}, bar_stall_until_{};
   std::string error_next_;

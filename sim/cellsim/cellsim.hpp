@@ -40,6 +40,11 @@ struct Options {
   std::string bar_mode;    // polled | streamed (default: the config's)
   double stream_hz = 20;
   bool val_echo = true;
+  // The controller's behaviours from hardware.md's evidence. The busy prompt (the config's
+  // second prompt, VAL's "*") shows while a move runs whenever the config lists two prompts.
+  bool val_sync_moves = false;        // DO MOVE's prompt comes back when the motion ends
+  bool val_completion_lines = false;  // "DO motion completed." when a move ends (AS: always)
+  bool val_boot_question = false;     // asks kBootQuestion until answered Y or N
   std::string val_eol = "\r\n";
   drivers::WhereLayout where_layout;
   int val_baud = 9600, bar_baud = 9600;  // the devices' rates; a driver at another rate sees garble

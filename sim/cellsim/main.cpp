@@ -51,6 +51,11 @@ A = amplitude x tool travel / 100 mm, at most the maximum
   --val-decimals N           WHERE decimals                                       [3]
   --val-hand                 WHERE prints a HAND column (--val-hand-blank: without value)
   --val-baud B, --bar-baud B the devices' baud rates; a driver at another sees garble [9600]
+The controller's dialect is the config's val.dialect (val2, vplus, kawasaki-as); with two
+prompts configured the second (VAL's "*") shows while a move runs.
+  --val-sync-moves           DO MOVE's prompt comes back when the motion ends
+  --val-completion-lines     "DO motion completed." when a move ends (kawasaki-as: always)
+  --val-boot-question        just booted: asks "Load VAL from floppy (Y/N)?" until answered
 Faults (0 = off):
   --bar-garbage-every N      garbage bytes in / a cut-off of every Nth bar line
   --bar-drop-every N         every Nth bar line is not sent
@@ -117,6 +122,9 @@ int main(int argc, char** argv) {
                                                {"val-hand", false},
                                                {"val-hand-blank", false},
                                                {"val-baud", true},
+                                               {"val-sync-moves", false},
+                                               {"val-completion-lines", false},
+                                               {"val-boot-question", false},
                                                {"bar-baud", true},
                                                {"bar-garbage-every", true},
                                                {"bar-drop-every", true},
@@ -209,6 +217,9 @@ int main(int argc, char** argv) {
     o.stream_hz = num("stream-hz", o.stream_hz);
     if (o.stream_hz <= 0) throw std::invalid_argument("--stream-hz must be positive");
     o.val_echo = !has("val-no-echo");
+    o.val_sync_moves = has("val-sync-moves");
+    o.val_completion_lines = has("val-completion-lines");
+    o.val_boot_question = has("val-boot-question");
     if (has("val-eol")) {
       const std::string e = v["val-eol"];
       if (e == "crlf")

@@ -33,11 +33,12 @@ struct Cell {
   std::function<bool(proto::Client&, const nlohmann::json& prompt)> mistake;
 
   // `daemon_keys` replace or add robocald config keys; `sim_args` are added to cellsim's (a later
-  // option wins).
+  // option wins); `drivers_json` (a drivers config, e.g. a dialect) is given to both cellsim and
+  // robocald.
   Cell(const std::vector<std::string>& connections, unsigned seed, bool centering = true,
        double lon_step_deg = 60, double time_scale = 50,
        const nlohmann::json& daemon_keys = nlohmann::json::object(),
-       const std::vector<std::string>& sim_args = {}) {
+       const std::vector<std::string>& sim_args = {}, const std::string& drivers_json = "") {
     truth_path = dir / "truth.json";
     const auto r = runRobocal("simulate --model " + kModel + " --seed " + std::to_string(seed) +
                               " --connections B1C1 --points-per-shell 1 --out " + (dir / "x.csv") +
@@ -49,7 +50,7 @@ struct Cell {
         "--bar-mm",   "150",      "--range-mm",   "2.0",
         "--noise-mm", "0.03"};
     args.insert(args.end(), sim_args.begin(), sim_args.end());
-    sim = std::make_unique<CellSimProcess>(args);
+    sim = std::make_unique<CellSimProcess>(args, drivers_json);
     std::ofstream(dir / "cell.json") << smallCell(connections, {0}, lon_step_deg).dump(1);
     nlohmann::json drivers = drivers::toJson(sim->driversConfig());
     drivers["bar"]["mode"] = "streamed";

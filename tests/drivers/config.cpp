@@ -21,7 +21,8 @@ std::string errorOf(const std::string& text) {
 
 TEST_CASE("Config: defaults are hardware.md's and survive a JSON round trip", "[drivers][config]") {
   const DriversConfig d;
-  CHECK(d.val.prompt == ".");
+  CHECK(d.val.prompt == std::vector<std::string>{".", "*"});
+  CHECK(d.val.dialect == "val2");
   CHECK(d.val.serial.baud == 9600);
   CHECK(d.val.where_command == "WHERE");
   CHECK(d.bar.mode == "polled");

@@ -59,7 +59,7 @@ TEST_CASE("Probe: verdicts in technician words", "[drivers][probe]") {
     CHECK_THAT(v.message, Catch::Contains("baud"));
   }
   SECTION("wrong prompt") {
-    config.val.prompt = ">";
+    config.val.prompt = {">"};
     const Diagnosis v = diagnoseVal(io, config.val);
     CHECK(v.verdict == Verdict::kUnparseable);
     CHECK_THAT(v.message, Catch::Contains("val.prompt"));
@@ -123,4 +123,45 @@ TEST_CASE("Probe: the robocal probe command reads robocald's config file",
   CHECK_THAT(out, Catch::Contains("VAL II controller on " + sim.valPath()));
   CHECK_THAT(out, Catch::Contains("joints (deg)"));
   CHECK_THAT(out, Catch::Contains(" mm "));
+}
+
+TEST_CASE("Probe: the bring-up move test in each dialect preset", "[drivers][probe][cli]") {
+  struct Case {
+    std::string dialect;
+    std::vector<std::string> sim_args;
+    std::string expect;
+  };
+  for (const Case& c : {Case{"val2", {}, "before the motion ends, showing '*'"},
+                        Case{"val2", {"--val-sync-moves"}, "when the motion ends (synchronous)"},
+                        Case{"vplus", {}, "before the motion ends"},
+                        Case{"kawasaki-as", {}, "completion line(s) were dropped"}}) {
+    DYNAMIC_SECTION(c.dialect << (c.sim_args.empty() ? "" : " " + c.sim_args[0])) {
+      std::vector<std::string> args{"--time-scale", "2"};  // 2 deg at SPEED 10: 0.17 s
+      args.insert(args.end(), c.sim_args.begin(), c.sim_args.end());
+      CellSimProcess sim(args, R"({"val": {"dialect": ")" + c.dialect + R"("}})");
+      const std::string config = sim.dir() + "/drivers.json";
+      std::ofstream(config) << toJson(sim.driversConfig()).dump(2);
+
+      // Without the confirmation nothing is sent: the arm does not move.
+      const auto [refused_code, refused_out] =
+          runRobocal("probe --config " + config + " --move-test 2");
+      INFO(refused_out);
+      CHECK(refused_code != 0);
+      CHECK_THAT(refused_out, Catch::Contains("--i-have-cleared-the-cell"));
+      CHECK(sim.status("speed") == "50");  // not even SPEED 10 was sent
+
+      const auto [code, out] = runRobocal("probe --config " + config +
+                                          " --move-test 2 --i-have-cleared-the-cell --model " +
+                                          ROBOCAL_SOURCE_DIR "/config/puma560.json");
+      INFO(out);
+      CHECK(code == 0);
+      for (int j = 1; j <= 6; ++j)
+        CHECK_THAT(out, Catch::Contains("joint " + std::to_string(j) + ": 2.000 deg and back"));
+      CHECK_THAT(out, Catch::Contains("WHERE round trip: median"));
+      CHECK_THAT(out, Catch::Contains("the " + c.dialect + " dialect drives this controller"));
+      CHECK_THAT(out, Catch::Contains(c.expect));
+      CHECK(sim.status("speed") == "10");
+      CHECK(sim.status("joints_deg") == "0.000,45.000,-90.000,0.000,45.000,0.000");  // back
+    }
+  }
 }

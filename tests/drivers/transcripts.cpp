@@ -37,6 +37,7 @@ ValReplyCollector collect(const ValDialect& dialect, const Exchange& x, bool byt
     for (char b : x.bytes) c.feed(std::string_view(&b, 1));
   else
     c.feed(x.bytes);
+  c.quiet();  // the end of the recording: the line is quiet
   return c;
 }
 
@@ -68,9 +69,17 @@ void checkVal(const Exchange& x, const std::string& file) {
       CHECK(whole.errors().empty());
     } else if (e == "! parse") {
       CHECK_THROWS_AS(parseWhere(whole.lines(), x.config), ProtocolError);
+    } else if (e.rfind("= ignored", 0) == 0) {
+      CHECK(whole.ignored() == std::stoi(e.substr(9)));
+      CHECK(bytes.ignored() == whole.ignored());
+    } else if (e.rfind("? ", 0) == 0) {
+      CHECK(whole.question() == e.substr(2));
+      CHECK(bytes.question() == whole.question());
+      CHECK(whole.errors().empty());
     } else if (e.rfind("! ", 0) == 0) {
+      // The most severe error line of the reply is the one the driver raises.
       REQUIRE(whole.errors().size() >= 1);
-      const ValErrorKind kind = dialect.classify(whole.errors().front());
+      const ValErrorKind kind = dialect.classify(dialect.mostSevere(whole.errors()));
       const std::string want = e.substr(2);
       CHECK(kind == (want == "power_off"      ? ValErrorKind::kPowerOff
                      : want == "out_of_range" ? ValErrorKind::kOutOfRange
@@ -111,8 +120,11 @@ int replay(const std::string& path) {
     if (line.empty() || line[0] == '#') continue;
     const std::string rest = line.size() > 2 ? line.substr(2) : "";
     if (line.rfind("@val ", 0) == 0) {
-      auto j = robocal::drivers::toJson(val);
-      j.merge_patch(nlohmann::json::parse(line.substr(5)));
+      // Keys over the current dialect; a "dialect" key starts again from that preset.
+      const auto patch = nlohmann::json::parse(line.substr(5));
+      auto j = robocal::drivers::toJson(
+          patch.contains("dialect") ? valPreset(patch["dialect"].get<std::string>()) : val);
+      j.merge_patch(patch);
       val = valConfigFromJson(j);
     } else if (line.rfind("@bar ", 0) == 0) {
       bar = barConfigFromJson(nlohmann::json::parse(line.substr(5)));
@@ -123,7 +135,7 @@ int replay(const std::string& path) {
         bar_line = unescapeBytes(rest);
       else
         exchanges.back().bytes += unescapeBytes(rest);
-    } else if (line[0] == '=' || line[0] == '!') {
+    } else if (line[0] == '=' || line[0] == '!' || line[0] == '?') {
       if (exchanges.empty()) {
         checkBar(bar, bar_line, line, file + ":" + std::to_string(n));
         ++checks;
@@ -143,10 +155,12 @@ int replay(const std::string& path) {
 
 }  // namespace
 
-TEST_CASE("Transcripts: VAL II dialect variants", "[drivers][protocol][transcripts]") {
+TEST_CASE("Transcripts: VAL II dialect variants and the presets",
+          "[drivers][protocol][transcripts]") {
   for (const char* name :
        {"val_default.txt", "val_no_echo_cr_hand.txt", "val_hand_blank_prompt_lines.txt",
-        "val_errors.txt", "val_unparseable.txt"}) {
+        "val_errors.txt", "val_unparseable.txt", "val_star_prompt.txt", "val_questions.txt",
+        "vplus.txt", "kawasaki_as.txt"}) {
     SECTION(name) {
       CHECK(replay(kDir + "/" + name) >= 2);
     }

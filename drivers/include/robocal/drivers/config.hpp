@@ -27,9 +27,14 @@ struct SerialConfig {
   bool exclusive = true;        // refuse to share the port with another program
 };
 
+// The controller's dialect. `dialect` names a preset (valPreset: val2, vplus, kawasaki-as) whose
+// values are the defaults of every other key; keys given in the file override them one by one.
 struct ValConfig {
   SerialConfig serial;
-  std::string prompt = ".";
+  std::string dialect = "val2";
+  // Every prompt the monitor shows. The first is the top-level one (VAL's "."); the others are
+  // shown while a program or a DO instruction runs (VAL's "*"). Any of them ends a reply.
+  std::vector<std::string> prompt = {".", "*"};
   std::string send_line_ending = "\r";
   // Command templates. {j1}..{j6} are joint angles (deg), {speed} the monitor speed (percent).
   std::string move_joints_command = "DO MOVE #PPOINT({j1},{j2},{j3},{j4},{j5},{j6})";
@@ -37,17 +42,32 @@ struct ValConfig {
   std::string speed_command = "SPEED {speed}";
   std::string abort_command = "ABORT";
   int joint_decimals = 3;
-  // One capture: the controller's message. Lines matching it are errors.
-  std::string error_regex = R"(^\s*\*+\s*(.*?)\s*\*?\s*$)";
-  std::string power_off_regex = "POWER OFF|E-?STOP|EMERGENCY";  // matched against the message
-  std::string out_of_range_regex = "OUT OF RANGE|LIMIT|UNREACHABLE";
+  // One capture: the controller's message. Lines matching it are errors. The message must
+  // start with a character other than '*' or a space: a bare "*" is VAL's busy prompt.
+  std::string error_regex = R"(^\s*\*+\s*([^*\s].*?)\s*\*?\s*$)";
+  // Severity of an error message, highest first; the most severe error line of a reply is the
+  // one raised.
+  std::string power_off_regex = "POWER OFF|POWER IS OFF|E-?STOP|EMERGENCY";
+  std::string out_of_range_regex = "OUT OF RANGE|OUT OF MOTION RANGE|LIMIT|UNREACHABLE";
+  // Lines the controller prints on its own that are neither replies nor errors (a DO motion's
+  // completion): dropped wherever they come, counted in ValStats::ignored_lines. Empty: none.
+  std::string ignore_regex = R"(^\s*(DO MOTION COMPLETED|PROGRAM COMPLETED)\b.*$)";
+  // Text left without a line ending that asks something ("Initialize?", "(Y/N)?", "CHANGE?"):
+  // the reply ends there and the driver raises QuestionError. It never answers on its own.
+  std::string question_regex = R"(\?\s*$)";
+  bool where_joints_first = false;  // how the simulator prints WHERE (the parser reads either)
   std::vector<std::string> location_headers = {"X", "Y", "Z", "O", "A", "T"};
   std::vector<std::string> joint_headers = {"JT1", "JT2", "JT3", "JT4", "JT5", "JT6"};
   // Per-command timeouts (until the prompt is back).
   double connect_timeout_s = 3.0;
   double command_timeout_s = 2.0;
   double where_timeout_s = 2.0;
-  double move_timeout_s = 5.0;  // until the move command's prompt, not the end of the motion
+  // A move command's deadline: this margin plus the move's largest joint change at the slowest
+  // joint speed (below) scaled by the current SPEED, so that a controller whose DO MOVE returns
+  // its prompt only when the motion ends has the time it needs. Past it, while the arm still
+  // moves, the driver goes on watching WHERE rather than failing.
+  double move_timeout_s = 5.0;
+  double slowest_joint_speed_deg_s = 20;  // at SPEED 100: the slowest joint's top speed
   double abort_timeout_s = 2.0;
   // Motion completion: poll WHERE until at the target and still.
   double poll_interval_s = 0.1;
@@ -58,6 +78,11 @@ struct ValConfig {
   double stopped_short_s = 3.0;   // still but not at target this long: the arm was stopped
   int where_retries = 2;          // unreadable WHERE replies in a row tolerated during a move
 };
+
+// The dialect presets: a ValConfig with a preset's defaults (serial settings untouched).
+// ConfigError naming the preset list for an unknown name.
+ValConfig valPreset(const std::string& dialect);
+std::vector<std::string> valPresetNames();
 
 struct BarConfig {
   SerialConfig serial;

@@ -19,6 +19,7 @@ enum class Verdict {
   kGarbled,      // bytes come back but not text: baud rate / parity / adapter
   kUnparseable,  // text comes back but not in the configured dialect
   kDeviceError,  // the device answers with an error (arm power off, no probe, ...)
+  kQuestion,     // the controller asks something ("Initialize?"): the operator answers it
 };
 const char* verdictName(Verdict v);
 

@@ -36,6 +36,17 @@ class TimeoutError : public DriverError {
   using DriverError::DriverError;
 };
 
+// A command's reply did not end within its time; echoSeen: the controller echoed the command.
+class CommandTimeoutError : public TimeoutError {
+ public:
+  CommandTimeoutError(const std::string& what, bool echo_seen)
+      : TimeoutError(what), echo_seen_(echo_seen) {}
+  bool echoSeen() const { return echo_seen_; }
+
+ private:
+  bool echo_seen_;
+};
+
 // No valid ball-bar reading arrived within stale_after_s.
 class StaleReadingError : public TimeoutError {
  public:
@@ -73,6 +84,14 @@ class ArmPowerOffError : public ControllerError {
 
 // The target is outside the arm's range or a joint limit (out_of_range_regex).
 class OutOfRangeError : public ControllerError {
+ public:
+  using ControllerError::ControllerError;
+};
+
+// The controller asks a question instead of showing its prompt ("Load VAL from floppy (Y/N)?",
+// "Initialize?", "CHANGE?"): the operator answers it on the controller's terminal; the drivers
+// never do. controllerMessage() is the question.
+class QuestionError : public ControllerError {
  public:
   using ControllerError::ControllerError;
 };

@@ -70,6 +70,7 @@ std::regex templateRegex(const std::string& text, std::vector<std::string>& fiel
 // ---------------------------------------------------------------------------------------------
 // VAL II monitor
 
+// Most severe first: the order in which a reply's error lines are raised.
 enum class ValErrorKind { kPowerOff, kOutOfRange, kOther };
 
 // A ValConfig with its regular expressions compiled.
@@ -83,31 +84,60 @@ class ValDialect {
   // The message of an error line ("Position out of range"), or nullopt for other lines.
   std::optional<std::string> errorMessage(const std::string& line) const;
   ValErrorKind classify(const std::string& message) const;
+  // The most severe of a reply's error messages (the first of equals); `messages` not empty.
+  const std::string& mostSevere(const std::vector<std::string>& messages) const;
   // Throws ArmPowerOffError, OutOfRangeError or ControllerError for an error message.
   [[noreturn]] void throwError(const std::string& command, const std::string& message) const;
+  // Any of the configured prompts (surrounding spaces aside).
   bool isPrompt(std::string_view text) const;
-  // An error line as the controller prints it: "*Position out of range*".
+  // A prompt that may also be the first character(s) of an error line (VAL's "*" and
+  // "*Arm power off*"): pending at the end of the received bytes it ends a reply only once the
+  // line has been quiet (ValReplyCollector::tentative).
+  bool couldStartError(std::string_view prompt) const;
+  // `line` starts with a prompt and the rest is `rest` ("*WHERE", ". WHERE" for "WHERE").
+  bool isPromptThen(const std::string& line, const std::string& rest) const;
+  // A line the controller prints on its own that is to be dropped (val.ignore_regex).
+  bool isIgnored(const std::string& line) const;
+  // Text that asks the operator something ("Initialize?"), per val.question_regex.
+  bool isQuestion(std::string_view text) const;
+  // The top-level prompt and the one shown while a program or DO runs (the first again when
+  // only one is configured). The simulator prints them.
+  const std::string& idlePrompt() const { return config_.prompt.front(); }
+  const std::string& busyPrompt() const { return config_.prompt.back(); }
+  std::string describePrompts() const;  // '.' or '*' (for messages)
+  // An error line as a VAL II controller prints it: "*Position out of range*".
   static std::string formatError(const std::string& message);
 
  private:
   ValConfig config_;
-  std::regex error_re_, power_off_re_, out_of_range_re_;
+  std::regex error_re_, power_off_re_, out_of_range_re_, ignore_re_, question_re_;
 };
 
 // Gathers the controller's reply to one command from received bytes: drops the echo of the
-// command (with or without the prompt before it) and empty lines, collects error lines, and is
-// complete when the prompt comes back (alone on a line, or pending at the end without a line
-// ending).
+// command (with or without a prompt before it), empty lines and ignored lines (completion
+// messages), collects error lines, and is complete when a prompt comes back (alone on a line, or
+// pending at the end without a line ending) or when the controller asks a question (text ending
+// in "?" left without a line ending: question()). A pending prompt that could begin an error
+// line ("*") only makes the reply tentative(): the caller calls quiet() when no byte has come
+// for a moment (the driver: kPromptQuietMs), which completes it.
 class ValReplyCollector {
  public:
   ValReplyCollector(const ValDialect& dialect, std::string command);
   // Returns true once the reply is complete.
   bool feed(std::string_view bytes);
   bool complete() const { return complete_; }
+  bool tentative() const { return !complete_ && tentative_; }
+  // The line has been quiet since the last feed: a tentative reply is complete. Returns complete().
+  bool quiet();
   const std::vector<std::string>& lines() const { return lines_; }    // reply text lines
   const std::vector<std::string>& errors() const { return errors_; }  // error messages
   const std::string& raw() const { return raw_; }                     // every byte received
   bool echoSeen() const { return echo_seen_; }
+  int ignored() const { return ignored_; }  // lines dropped by val.ignore_regex
+  // The prompt that ended the reply ("." or "*"), or empty.
+  const std::string& prompt() const { return prompt_; }
+  // The question that ended the reply ("Load VAL from floppy (Y/N)?"), or empty.
+  const std::string& question() const { return question_; }
   // Bytes that came after the end of the reply in the same read (an unsolicited message the
   // controller printed next, such as an E-stop report): the caller must not drop them.
   const std::string& rest() const { return rest_; }
@@ -118,9 +148,9 @@ class ValReplyCollector {
   std::string command_;
   LineSplitter splitter_;
   std::vector<std::string> lines_, errors_;
-  std::string raw_, rest_;
-  bool complete_ = false, echo_seen_ = false;
-  int line_endings_ = 0;
+  std::string raw_, rest_, question_, prompt_;
+  bool complete_ = false, echo_seen_ = false, tentative_ = false;
+  int line_endings_ = 0, ignored_ = 0;
 };
 
 struct WhereReply {
@@ -140,9 +170,14 @@ struct WhereLayout {
   int decimals = 3;
   bool hand_column = false;  // a "HAND" header after T with a value (or blank)
   bool hand_blank = false;
+  bool joints_first = false;  // the joint block before the location block (Kawasaki AS)
 };
 std::vector<std::string> formatWhere(const ValConfig& config, const WhereLayout& layout,
                                      const Location6& location, const Joints6& joints_deg);
+
+// How long the line must be quiet before a tentative prompt ("*") ends a reply: several bytes'
+// time at 9600 baud plus a USB adapter's latency timer (16 ms).
+inline constexpr int kPromptQuietMs = 50;
 
 // ---------------------------------------------------------------------------------------------
 // Ball-bar reader

@@ -32,9 +32,11 @@ struct ValStats {
   long commands = 0;
   long timeouts = 0;
   long controller_errors = 0;
-  long unsolicited_lines = 0;  // received between commands (an E-stop message, late replies)
-  long where_polls = 0;        // WHEREs sent while waiting for motions
-  long where_retries = 0;      // of which asked again after an unreadable reply
+  long unsolicited_lines = 0;      // received between commands (an E-stop message, late replies)
+  long where_polls = 0;            // WHEREs sent while waiting for motions
+  long where_retries = 0;          // of which asked again after an unreadable reply
+  long ignored_lines = 0;          // dropped by val.ignore_regex (completion messages)
+  long move_timeouts_watched = 0;  // move commands past their deadline, then watched by WHERE
 };
 
 // Decides from successive WHERE replies whether a move has ended (pure; used by the driver).
@@ -83,6 +85,10 @@ class ValController {
   void abort();
   // Sends the move command only (the prompt may come back before the motion ends).
   void startMove(const Joints6& target_deg);
+  // The move command's deadline (s): val.move_timeout_s plus the largest joint change from the
+  // last WHERE at the slowest joint speed scaled by the last SPEED set; motion_timeout_s while
+  // either is unknown.
+  double moveCommandTimeout(const Joints6& target_deg) const;
   // Polls WHERE until the joints are within at_target_tol_deg of the target and still;
   // MotionError on motion_timeout_s or when the arm stops short for stopped_short_s.
   // `progress` (optional) sees every WHERE.
@@ -104,10 +110,14 @@ class ValController {
   const ValDialect& dialect() const { return dialect_; }
   SerialLink& link() { return link_; }
   const ValStats& stats() const { return stats_; }
+  // The prompt that ended the latest reply: VAL shows "*" while a program or DO runs.
+  const std::string& lastPrompt() const { return last_prompt_; }
 
  private:
   struct Exchange;
   void received(std::string_view bytes);
+  void replyComplete();
+  void waitPromptQuiet(std::uint64_t id);
   void unsolicited(std::string_view bytes);
   void startNext();
   void waitQuiet(std::uint64_t id);
@@ -117,13 +127,19 @@ class ValController {
   template <typename T>
   T runSync(const std::function<void(std::function<void(std::exception_ptr, T)>)>& start,
             double timeout_s);
+  // One WHERE of a motion wait, then the next after poll_interval_s. `where_timeout_s` is the
+  // first WHERE's: longer after a move command timed out (a controller busy with a synchronous
+  // move answers when the motion ends).
   void pollMotion(std::shared_ptr<MotionMonitor> monitor, Joints6 target, WhereHandler handler,
-                  ProgressHandler progress);
+                  ProgressHandler progress, double where_timeout_s);
+  void asyncWhere(double timeout_s, WhereHandler handler);
+  std::string describeTimeout(const std::string& command, double timeout_s,
+                              const ValReplyCollector& reply) const;
 
   boost::asio::io_context& io_;
   ValDialect dialect_;
   SerialLink link_;
-  boost::asio::steady_timer timer_, poll_timer_;
+  boost::asio::steady_timer timer_, poll_timer_, quiet_timer_;
   ValStats stats_;
   std::shared_ptr<int> alive_;  // timer handlers hold a weak_ptr: they never outlive the controller
   bool disconnected_ = false, out_of_sync_ = false;
@@ -135,6 +151,9 @@ class ValController {
   LineSplitter unsolicited_splitter_;
   std::vector<std::string> pending_errors_;
   std::function<void(const std::string&)> unsolicited_callback_;
+  std::optional<Joints6> last_joints_;   // from the latest WHERE
+  std::optional<double> speed_percent_;  // the latest SPEED the controller accepted
+  std::string last_prompt_;
 };
 
 }  // namespace robocal::drivers
