@@ -20,7 +20,7 @@ TEST_CASE("a run in each controller dialect preset reaches DONE", "[e2e][dialect
   for (const Case& c :
        {Case{"val2", {"--val-sync-moves"}}, Case{"vplus", {}}, Case{"kawasaki-as", {}}}) {
     DYNAMIC_SECTION(c.dialect) {
-      Cell cell({"B1C1", "B2C2"}, 5, false, 90, 50, json::object(), c.sim_args,
+      Cell cell({"B1C1", "B2C2"}, 5, true, 60, 50, json::object(), c.sim_args,
                 R"({"val": {"dialect": ")" + c.dialect + R"("}})");
       auto client = cell.daemon->client();
       client->send({{"cmd", "watch"}, {"enable", true}});
@@ -28,7 +28,10 @@ TEST_CASE("a run in each controller dialect preset reaches DONE", "[e2e][dialect
           client->request({{"cmd", "start"}, {"token", cell.daemon->token()}}, 30, "ACK");
       REQUIRE(ack["class"] == "ACK");
       std::vector<json> seen;
-      REQUIRE(cell.operate(*client, {"done", "paused", "error", "aborted"}, 180, &seen) == "done");
+      const std::string end =
+          cell.operate(*client, {"done", "paused", "error", "aborted"}, 180, &seen);
+      INFO(cell.daemon->logText().substr(0, 6000));
+      REQUIRE(end == "done");
       int samples = 0;
       for (const json& o : seen) samples += o["class"] == "SAMPLE";
       const json result = client->request({{"cmd", "result"}}, 10, "RESULT");

@@ -1,6 +1,8 @@
 // Replays the recorded transcripts in tests/drivers/transcripts/ through the protocol parsers:
 // each VAL II reply whole and one byte at a time, each bar line, against the expectations
 // written in the files (format: transcripts/README.md).
+#include "transcript_replay.hpp"
+
 #include <robocal/drivers/errors.hpp>
 #include <robocal/drivers/protocol.hpp>
 
@@ -106,10 +108,10 @@ void checkBar(const BarConfig& config, const std::string& line, const std::strin
   }
 }
 
-int replay(const std::string& path) {
-  std::ifstream in(path);
-  REQUIRE(in);
-  const std::string file = std::filesystem::path(path).filename();
+}  // namespace
+
+int robocal::test::replayTranscript(const std::string& text, const std::string& file) {
+  std::istringstream in(text);
   ValConfig val;
   BarConfig bar;
   std::vector<Exchange> exchanges;
@@ -151,6 +153,16 @@ int replay(const std::string& path) {
     checks += static_cast<int>(x.expectations.size());
   }
   return checks;
+}
+
+namespace {
+
+int replay(const std::string& path) {
+  std::ifstream in(path);
+  REQUIRE(in);
+  std::stringstream text;
+  text << in.rdbuf();
+  return robocal::test::replayTranscript(text.str(), std::filesystem::path(path).filename());
 }
 
 }  // namespace
