@@ -2,6 +2,7 @@
 // ball-bar reader's port, shows WHERE and live bar readings, and says in plain words what is
 // wrong: no port, no answer, wrong baud rate (garbled answer), or an answer robocal cannot read.
 #include "args.hpp"
+#include "device_args.hpp"
 
 #include <robocal/build_info.hpp>
 #include <robocal/drivers/config.hpp>
@@ -47,18 +48,6 @@ Bring-up move test (moves the arm; the controller only):
   --i-have-cleared-the-cell   required with --move-test: the arm will move. Clear the cell,
                         detach the ball-bar, keep a hand on the E-stop.
 )";
-
-void applyPort(drivers::SerialConfig& serial, const std::string& port) {
-  serial.path.clear();
-  serial.usb_serial.clear();
-  serial.usb_description.clear();
-  if (port.rfind("usb-serial:", 0) == 0)
-    serial.usb_serial = port.substr(11);
-  else if (port.rfind("usb:", 0) == 0)
-    serial.usb_description = port.substr(4);
-  else
-    serial.path = port;
-}
 
 void report(const drivers::Diagnosis& d) {
   if (d.verdict == drivers::Verdict::kOk) {
@@ -112,12 +101,8 @@ int run(const std::vector<std::string>& argv) {
     std::printf(kHelp, build::kDaemonConfigFile);
     return 0;
   }
-  std::string config_file = args.get("config", "");
-  if (config_file.empty())
-    for (const char* fallback : {"config/drivers.json", build::kDaemonConfigFile})
-      if (config_file.empty() && ::access(fallback, R_OK) == 0) config_file = fallback;
-  drivers::DriversConfig config;
-  if (!config_file.empty()) config = drivers::loadDriversOrDaemonConfig(config_file);
+  const std::string config_file = findDriversConfig(args.get("config", ""));
+  drivers::DriversConfig config = loadDevicesConfig(config_file);
   std::printf("Drivers config: %s\n", config_file.empty() ? "defaults" : config_file.c_str());
   bool do_val = args.has("val"), do_bar = args.has("bar");
   if (!do_val && !do_bar) do_val = do_bar = true;

@@ -4,6 +4,7 @@
 // (robocal/drivers/transcript.hpp) so a real controller's dialect becomes a test case. It never
 // sends anything the user did not type.
 #include "args.hpp"
+#include "device_args.hpp"
 
 #include <robocal/build_info.hpp>
 #include <robocal/drivers/config.hpp>
@@ -61,18 +62,6 @@ present, else the daemon's %s if present, else the defaults.
   --wait S              when the input is not a terminal, wait up to S seconds for the prompt
                         before sending the next line                     [10]
 )";
-
-void applyPort(drivers::SerialConfig& serial, const std::string& port) {
-  serial.path.clear();
-  serial.usb_serial.clear();
-  serial.usb_description.clear();
-  if (port.rfind("usb-serial:", 0) == 0)
-    serial.usb_serial = port.substr(11);
-  else if (port.rfind("usb:", 0) == 0)
-    serial.usb_description = port.substr(4);
-  else
-    serial.path = port;
-}
 
 std::string localTime() {
   const std::time_t now = std::time(nullptr);
@@ -303,12 +292,8 @@ int run(const std::vector<std::string>& argv) {
   }
   if (!args.positional().empty())
     throw UsageError("unexpected argument '" + args.positional().front() + "'");
-  std::string config_file = args.get("config", "");
-  if (config_file.empty())
-    for (const char* fallback : {"config/drivers.json", build::kDaemonConfigFile})
-      if (config_file.empty() && ::access(fallback, R_OK) == 0) config_file = fallback;
-  drivers::DriversConfig config;
-  if (!config_file.empty()) config = drivers::loadDriversOrDaemonConfig(config_file);
+  const std::string config_file = findDriversConfig(args.get("config", ""));
+  drivers::DriversConfig config = loadDevicesConfig(config_file);
   if (args.has("val")) applyPort(config.val.serial, args.get("val", ""));
   config.val.serial.baud = static_cast<int>(args.integer("val-baud", config.val.serial.baud));
   const double wait_s = args.number("wait", 10);

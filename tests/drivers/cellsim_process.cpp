@@ -11,7 +11,10 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -131,6 +134,22 @@ std::string CellSimProcess::status(const std::string& key) const {
   for (std::string word; in >> word;)
     if (word.rfind(key + "=", 0) == 0) return word.substr(key.size() + 1);
   return "";
+}
+
+double maxJointDiff(const drivers::Joints6& a, const drivers::Joints6& b) {
+  double m = 0;
+  for (int i = 0; i < 6; ++i) m = std::max(m, std::abs(a[i] - b[i]));
+  return m;
+}
+
+std::pair<int, std::string> runShell(const std::string& command) {
+  FILE* p = ::popen((command + " 2>&1").c_str(), "r");
+  if (!p) return {-1, "cannot run " + command};
+  std::string out;
+  char buf[512];
+  while (std::fgets(buf, sizeof buf, p)) out += buf;
+  const int status = ::pclose(p);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
 }
 
 drivers::DriversConfig CellSimProcess::driversConfig() const {

@@ -4,11 +4,20 @@
 #pragma once
 
 #include <robocal/drivers/config.hpp>
+#include <robocal/drivers/protocol.hpp>
 
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace robocal::test {
+
+// The joints cellsim starts at (deg), and the largest difference between two joint sets (deg).
+inline const drivers::Joints6 kCellSimStart{0, 45, -90, 0, 45, 0};
+double maxJointDiff(const drivers::Joints6& a, const drivers::Joints6& b);
+
+// Runs a shell command line; its exit code and its stdout and stderr.
+std::pair<int, std::string> runShell(const std::string& command);
 
 class CellSimProcess {
  public:

@@ -17,14 +17,7 @@ using robocal::test::CellSimProcess;
 
 namespace {
 std::pair<int, std::string> runRobocal(const std::string& args) {
-  const std::string cmd = std::string(ROBOCAL_BINARY_DIR "/cli/robocal ") + args + " 2>&1";
-  FILE* p = ::popen(cmd.c_str(), "r");
-  REQUIRE(p);
-  std::string out;
-  char buf[512];
-  while (std::fgets(buf, sizeof buf, p)) out += buf;
-  const int status = ::pclose(p);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+  return robocal::test::runShell(std::string(ROBOCAL_BINARY_DIR "/cli/robocal ") + args);
 }
 }  // namespace
 

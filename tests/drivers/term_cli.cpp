@@ -15,18 +15,9 @@
 #include <sstream>
 
 using robocal::test::CellSimProcess;
+using robocal::test::runShell;
 
 namespace {
-
-std::pair<int, std::string> runShell(const std::string& command) {
-  FILE* p = ::popen((command + " 2>&1").c_str(), "r");
-  REQUIRE(p);
-  std::string out;
-  char buf[512];
-  while (std::fgets(buf, sizeof buf, p)) out += buf;
-  const int status = ::pclose(p);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
 
 std::string readFile(const std::string& path) {
   std::ifstream in(path);

@@ -13,13 +13,8 @@ using robocal::test::CellSimProcess;
 
 namespace {
 
-double maxDiff(const Joints6& a, const Joints6& b) {
-  double m = 0;
-  for (int i = 0; i < 6; ++i) m = std::max(m, std::abs(a[i] - b[i]));
-  return m;
-}
-
-const Joints6 kStart{0, 45, -90, 0, 45, 0};
+const Joints6& kStart = robocal::test::kCellSimStart;
+const auto maxDiff = robocal::test::maxJointDiff;
 
 }  // namespace
 
