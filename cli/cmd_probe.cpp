@@ -85,8 +85,8 @@ bool moveTest(boost::asio::io_context& io, const drivers::ValConfig& config,
   if (!r.where_round_trip_s.empty()) {
     std::vector<double> t = r.where_round_trip_s;
     std::sort(t.begin(), t.end());
-    std::printf("  WHERE round trip: median %.3f s, max %.3f s (%zu)\n", t[t.size() / 2], t.back(),
-                t.size());
+    std::printf("  WHERE round trip: median %.1f ms, max %.1f ms (%zu)\n", 1000 * t[t.size() / 2],
+                1000 * t.back(), t.size());
   }
   std::printf("  %s: %s\n", r.ok ? "OK" : "PROBLEM", r.verdict.c_str());
   return r.ok;

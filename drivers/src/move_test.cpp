@@ -58,7 +58,7 @@ std::string verdictText(const MoveTestReport& r, const ValConfig& config) {
   if (r.move_timeouts_watched > 0)
     v += "Some move commands outlived their deadline and were watched to the end: raise "
          "val.move_timeout_s or lower val.slowest_joint_speed_deg_s. ";
-  return v;
+  return trim(v);
 }
 
 }  // namespace
@@ -104,7 +104,7 @@ MoveTestReport runMoveTest(ValController& val, const MoveTestOptions& o,
       say("joint " + std::to_string(joint) + ": " + formatFixed(j.step_deg, 3) + " deg and back, " +
           formatFixed(j.out_s, 2) + " s + " + formatFixed(j.back_s, 2) + " s, " +
           std::to_string(j.where_polls) + " WHEREs, prompt '" + j.prompt_after_move + "' after " +
-          formatFixed(j.command_reply_s, 3) + " s");
+          formatFixed(1000 * j.command_reply_s, 0) + " ms");
     }
     r.ok = true;
   } catch (const std::exception& e) {
