@@ -10,12 +10,6 @@ double secondsBetween(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double>(b - a).count();
 }
 
-double maxAbsDiff(const Joints6& a, const Joints6& b) {
-  double m = 0;
-  for (int i = 0; i < 6; ++i) m = std::max(m, std::abs(a[i] - b[i]));
-  return m;
-}
-
 // One move: the command, then WHERE until still at the target; what the controller did.
 struct MoveSeen {
   double command_reply_s = 0, total_s = 0;
@@ -34,7 +28,7 @@ MoveSeen move(ValController& val, const Joints6& target) {
   const WhereReply end = val.waitForMotion(target, [&](const WhereReply& w) {
     if (++seen.polls == 1)
       seen.short_of_target_after_reply =
-          maxAbsDiff(w.joints_deg, target) > val.dialect().config().at_target_tol_deg;
+          maxJointDiffDeg(w.joints_deg, target) > val.dialect().config().at_target_tol_deg;
   });
   seen.total_s = secondsBetween(t0, Clock::now());
   seen.end = end.joints_deg;
@@ -96,7 +90,7 @@ MoveTestReport runMoveTest(ValController& val, const MoveTestOptions& o,
       j.returned_while_moving =
           (!there.prompt.empty() && there.prompt != val.dialect().idlePrompt()) ||
           there.short_of_target_after_reply;
-      j.error_deg = maxAbsDiff(there.end, out);
+      j.error_deg = maxJointDiffDeg(there.end, out);
       const MoveSeen back = move(val, r.start_deg);
       j.back_s = back.total_s;
       j.where_polls = there.polls + back.polls;

@@ -141,6 +141,12 @@ std::optional<double> parseNumber(std::string_view token) {
   return std::strtod(s.c_str(), nullptr);
 }
 
+double maxJointDiffDeg(const Joints6& a, const Joints6& b) {
+  double m = 0;
+  for (int i = 0; i < 6; ++i) m = std::max(m, std::abs(a[i] - b[i]));
+  return m;
+}
+
 std::string formatFixed(double value, int decimals) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.*f", decimals, value);

@@ -18,12 +18,6 @@ std::string describeJoints(const Joints6& j) {
   return s;
 }
 
-double maxAbsDiff(const Joints6& a, const Joints6& b) {
-  double m = 0;
-  for (int i = 0; i < 6; ++i) m = std::max(m, std::abs(a[i] - b[i]));
-  return m;
-}
-
 double secondsSince(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
 }
@@ -49,7 +43,7 @@ MotionMonitor::MotionMonitor(const ValConfig& config, const Joints6& target,
       moving_since_(start) {}
 
 MotionMonitor::State MotionMonitor::update(const Joints6& joints, Clock::time_point now) {
-  if (previous_ && maxAbsDiff(joints, *previous_) <= config_.still_tol_deg) {
+  if (previous_ && maxJointDiffDeg(joints, *previous_) <= config_.still_tol_deg) {
     ++still_;
   } else {
     still_ = 0;
@@ -57,7 +51,7 @@ MotionMonitor::State MotionMonitor::update(const Joints6& joints, Clock::time_po
   }
   previous_ = joints;
   if (still_ >= config_.still_polls) {
-    if (maxAbsDiff(joints, target_) <= config_.at_target_tol_deg) return State::kArrived;
+    if (maxJointDiffDeg(joints, target_) <= config_.at_target_tol_deg) return State::kArrived;
     if (now - moving_since_ >= seconds(config_.stopped_short_s)) return State::kStoppedShort;
   }
   if (now >= deadline_) return State::kTimedOut;
@@ -67,7 +61,7 @@ MotionMonitor::State MotionMonitor::update(const Joints6& joints, Clock::time_po
 std::string MotionMonitor::explain(State state, const Joints6& joints) const {
   const std::string where = ": at " + describeJoints(joints) + ", target " +
                             describeJoints(target_) + " (" +
-                            formatFixed(maxAbsDiff(joints, target_), 3) + " deg off)";
+                            formatFixed(maxJointDiffDeg(joints, target_), 3) + " deg off)";
   if (state == State::kStoppedShort)
     return "the arm stopped short of the target and stayed still for " +
            formatFixed(config_.stopped_short_s, 1) +
@@ -412,7 +406,7 @@ double ValController::moveCommandTimeout(const Joints6& target) const {
   const ValConfig& c = dialect_.config();
   if (!last_joints_ || !speed_percent_) return std::max(c.move_timeout_s, c.motion_timeout_s);
   const double speed_deg_s = c.slowest_joint_speed_deg_s * *speed_percent_ / 100.0;
-  return c.move_timeout_s + maxAbsDiff(target, *last_joints_) / speed_deg_s;
+  return c.move_timeout_s + maxJointDiffDeg(target, *last_joints_) / speed_deg_s;
 }
 
 void ValController::abort() {

@@ -137,9 +137,7 @@ std::string CellSimProcess::status(const std::string& key) const {
 }
 
 double maxJointDiff(const drivers::Joints6& a, const drivers::Joints6& b) {
-  double m = 0;
-  for (int i = 0; i < 6; ++i) m = std::max(m, std::abs(a[i] - b[i]));
-  return m;
+  return drivers::maxJointDiffDeg(a, b);
 }
 
 std::pair<int, std::string> runShell(const std::string& command) {

@@ -19,6 +19,9 @@ namespace robocal::drivers {
 using Joints6 = std::array<double, 6>;    // joint readings, deg
 using Location6 = std::array<double, 6>;  // X, Y, Z (mm), O, A, T (deg)
 
+// The largest difference between two joint sets, joint by joint (deg).
+double maxJointDiffDeg(const Joints6& a, const Joints6& b);
+
 // ---------------------------------------------------------------------------------------------
 // Lines and text
 
