@@ -73,13 +73,16 @@ std::string MotionMonitor::explain(State state, const Joints6& joints) const {
 // ------------------------------------------------------------------------------- ValController
 
 struct ValController::Exchange {
-  Exchange(const ValDialect& dialect, std::string command, double timeout, ReplyHandler h)
+  Exchange(const ValDialect& dialect, std::string command, double timeout, double echo_timeout,
+           ReplyHandler h)
       : text(std::move(command)),
         timeout_s(timeout),
+        echo_timeout_s(echo_timeout),
         collector(dialect, text),
         handler(std::move(h)) {}
   std::string text;
   double timeout_s;
+  double echo_timeout_s;  // the echo must be back by then, even when the reply may take longer
   ValReplyCollector collector;
   ReplyHandler handler;
   std::string bytes;  // what is sent: text and the line ending
@@ -206,7 +209,13 @@ void ValController::unsolicited(std::string_view bytes) {
 }
 
 void ValController::asyncCommand(const std::string& text, double timeout_s, ReplyHandler handler) {
-  auto x = std::make_unique<Exchange>(dialect_, text, timeout_s, std::move(handler));
+  asyncCommand(text, timeout_s, timeout_s, std::move(handler));
+}
+
+void ValController::asyncCommand(const std::string& text, double timeout_s, double echo_timeout_s,
+                                 ReplyHandler handler) {
+  auto x =
+      std::make_unique<Exchange>(dialect_, text, timeout_s, echo_timeout_s, std::move(handler));
   x->bytes = text + dialect_.config().send_line_ending;
   if (!isConnected()) {
     const std::string why = disconnect_reason_.empty()
@@ -270,14 +279,28 @@ void ValController::send() {
                              if (ec && ec != boost::asio::error::operation_aborted)
                                lost(ec.message());
                            });
-  timer_.expires_at(current_->deadline);
+  // A long reply (a synchronous move) is waited for only once the echo has shown the command
+  // arrived: a lost command is found after echo_timeout_s, not after the whole move's time.
+  // A controller seen not to echo gets the whole time.
+  const auto echo_deadline = std::min(current_->deadline, deadlineAfter(current_->echo_timeout_s));
+  waitDeadline(id, controller_echoes_ ? echo_deadline : current_->deadline);
+}
+
+void ValController::waitDeadline(std::uint64_t id, Clock::time_point when) {
+  std::weak_ptr<int> alive = alive_;
+  timer_.expires_at(when);
   timer_.async_wait([this, alive, id](const boost::system::error_code& ec) {
     if (ec || alive.expired() || !current_ || exchange_id_ != id) return;
+    const ValReplyCollector& reply = current_->collector;
+    if ((reply.echoSeen() || !controller_echoes_) && Clock::now() < current_->deadline)
+      return waitDeadline(id, current_->deadline);
     ++stats_.timeouts;
     out_of_sync_ = true;
-    const ValReplyCollector& reply = current_->collector;
-    finish(errorPtr(CommandTimeoutError(describeTimeout(current_->text, current_->timeout_s, reply),
-                                        reply.echoSeen())));
+    const double waited_s = reply.echoSeen()
+                                ? current_->timeout_s
+                                : std::min(current_->timeout_s, current_->echo_timeout_s);
+    finish(errorPtr(
+        CommandTimeoutError(describeTimeout(current_->text, waited_s, reply), reply.echoSeen())));
   });
 }
 
@@ -313,7 +336,10 @@ void ValController::finish(std::exception_ptr error) {
   std::unique_ptr<Exchange> x = std::move(current_);
   std::vector<std::string> lines;
   stats_.ignored_lines += x->collector.ignored();
-  if (!error) last_prompt_ = x->collector.prompt();
+  if (!error) {
+    last_prompt_ = x->collector.prompt();
+    if (!x->text.empty()) controller_echoes_ = x->collector.echoSeen();  // not a wake-up
+  }
   if (!error) {
     std::vector<std::string> errors = std::move(pending_errors_);
     pending_errors_.clear();
@@ -417,7 +443,12 @@ void ValController::abort() {
 void ValController::startMove(const Joints6& target) {
   for (double v : target)
     if (!std::isfinite(v)) throw DriverError("move target has a joint angle that is not a number");
-  command(dialect_.moveCommand(target), moveCommandTimeout(target));
+  runSync<std::vector<std::string>>(
+      [&](ReplyHandler h) {
+        asyncCommand(dialect_.moveCommand(target), moveCommandTimeout(target),
+                     dialect_.config().move_timeout_s, std::move(h));
+      },
+      moveCommandTimeout(target) + 1);
 }
 
 void ValController::pollMotion(std::shared_ptr<MotionMonitor> monitor, Joints6 target,
@@ -472,7 +503,7 @@ void ValController::asyncMoveJoints(const Joints6& target, WhereHandler handler,
     }
   const auto start = Clock::now();
   asyncCommand(
-      dialect_.moveCommand(target), moveCommandTimeout(target),
+      dialect_.moveCommand(target), moveCommandTimeout(target), dialect_.config().move_timeout_s,
       [this, target, handler, progress, start](std::exception_ptr e, std::vector<std::string>) {
         const ValConfig& c = dialect_.config();
         double first_where_s = c.where_timeout_s;

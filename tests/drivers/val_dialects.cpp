@@ -104,6 +104,22 @@ TEST_CASE("VAL dialects: a 90 deg synchronous move at SPEED 10 takes its time", 
     CHECK(val.stats().move_timeouts_watched == 1);
     CHECK(maxDiff(val.where().joints_deg, target) <= 0.006);  // in step again
   }
+  SECTION("a move command lost on a stalled line fails at move_timeout_s, not motion_timeout_s") {
+    config.motion_timeout_s = 60;  // the deadline while SPEED is unknown: far longer than 2 s
+    ValController val(io, config);
+    val.connect();
+    REQUIRE(val.moveCommandTimeout(target) == Approx(60));
+    REQUIRE(sim.control("fault stall val 3").rfind("ok", 0) == 0);
+    const auto start = std::chrono::steady_clock::now();
+    CHECK_THROWS_AS(val.moveJoints(target), TimeoutError);
+    const double waited_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    CHECK(waited_s < 10);  // 2 s and a margin for a loaded machine; never the 60 s
+    CHECK(val.stats().timeouts == 1);
+    CHECK(val.stats().move_timeouts_watched == 0);
+    std::this_thread::sleep_for(std::chrono::milliseconds(1200));  // the stall ends
+    CHECK(maxDiff(val.where().joints_deg, kStart) <= 0.006);       // the arm never moved
+  }
 }
 
 TEST_CASE("VAL dialects: completion lines are dropped, inside a reply too", "[drivers][val]") {

@@ -85,7 +85,8 @@ class ValController {
   void abort();
   // Sends the move command only (the prompt may come back before the motion ends).
   void startMove(const Joints6& target_deg);
-  // The move command's deadline (s): val.move_timeout_s plus the largest joint change from the
+  // The move command's deadline (s): its echo within val.move_timeout_s, its prompt within
+  // move_timeout_s plus the largest joint change from the
   // last WHERE at the slowest joint speed scaled by the last SPEED set; motion_timeout_s while
   // either is unknown.
   double moveCommandTimeout(const Joints6& target_deg) const;
@@ -122,6 +123,10 @@ class ValController {
   void startNext();
   void waitQuiet(std::uint64_t id);
   void send();
+  void waitDeadline(std::uint64_t id, Clock::time_point when);
+  // A command whose echo must be back within echo_timeout_s and its reply within timeout_s.
+  void asyncCommand(const std::string& text, double timeout_s, double echo_timeout_s,
+                    ReplyHandler handler);
   void finish(std::exception_ptr error);
   void lost(const std::string& why);
   template <typename T>
@@ -154,6 +159,7 @@ class ValController {
   std::optional<Joints6> last_joints_;   // from the latest WHERE
   std::optional<double> speed_percent_;  // the latest SPEED the controller accepted
   std::string last_prompt_;
+  bool controller_echoes_ = true;  // the last reply had the echo: move commands must see one
 };
 
 }  // namespace robocal::drivers
