@@ -19,6 +19,7 @@ launcher=()
 command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
 # Only the libraries the harnesses need: no tests, daemon, simulator or command-line tool.
 CC=clang CXX=clang++ cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O2 ${ROBOCAL_DEBUG_FLAGS:--g} -DNDEBUG" \
   -DROBOCAL_BUILD_FUZZ=ON -DROBOCAL_BUILD_TESTS=OFF "-DROBOCAL_SKIP_MODULES=daemon;sim" \
   "${launcher[@]}" >/dev/null
 cmake --build "$build" --target fuzz -j "$jobs"

@@ -106,7 +106,7 @@ TEST_CASE("an optimal plan of N points predicts less error than a grid of as man
     CHECK(again.shells[s].steps.size() == optimal.shells[s].steps.size());
 }
 
-TEST_CASE("an optimal plan keeps its time budget, swaps included", "[design]") {
+TEST_CASE("an optimal plan keeps its time budget, swaps included", "[design][heavy]") {
   const CellConfig cell = smallCell();
   DesignOptions options = smallOptions();
   options.budget_s = 20 * 60;

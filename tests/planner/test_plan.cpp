@@ -119,7 +119,8 @@ TEST_CASE("the default plan identifies all 36 independent parameters") {
   }
 }
 
-TEST_CASE("every move of the plan keeps the nominal radial deviation within via_tolerance") {
+TEST_CASE("every move of the plan keeps the nominal radial deviation within via_tolerance",
+          "[heavy]") {
   const Kinematics kin(nominal());
   const double tol = defaultCell().motion.via_tolerance_mm;
   double worst = 0;
@@ -160,7 +161,8 @@ TEST_CASE(
   }
 }
 
-TEST_CASE("check-plan accepts the plan, also after a round trip through the file format") {
+TEST_CASE("check-plan accepts the plan, also after a round trip through the file format",
+          "[heavy]") {
   const Plan& plan = defaultPlan();
   CHECK(checkPlan(nominal(), defaultCell(), plan).empty());
   const Plan back = parsePlan(formatPlan(plan), "round trip");
@@ -177,7 +179,7 @@ TEST_CASE("check-plan accepts the plan, also after a round trip through the file
   CHECK(violations.empty());
 }
 
-TEST_CASE("check-plan catches a hand-corrupted plan and names the step") {
+TEST_CASE("check-plan catches a hand-corrupted plan and names the step", "[heavy]") {
   Plan plan = defaultPlan();
   ShellPlan& shell = plan.shells[2];
   SECTION("a joint nudged by 2 degrees") {
@@ -219,7 +221,8 @@ TEST_CASE("check-plan catches a hand-corrupted plan and names the step") {
   }
 }
 
-TEST_CASE("robocal check-plan prints each violation with its step and exits non-zero", "[cli]") {
+TEST_CASE("robocal check-plan prints each violation with its step and exits non-zero",
+          "[cli][heavy]") {
   nlohmann::json j = nlohmann::json::parse(formatPlan(defaultPlan()));
   const std::string good = tempPath("good_plan.json");
   const std::string bad = tempPath("bad_plan.json");
