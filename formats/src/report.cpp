@@ -4,6 +4,7 @@
 #include <robocal/formats/error.hpp>
 
 #include "report_parts.hpp"
+#include "svg_chart.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -69,94 +70,13 @@ nlohmann::ordered_json shellsJson(const ShellTable& table) {
 namespace {
 
 using ojson = nlohmann::ordered_json;
+using report_detail::ChartAxis;
 using report_detail::escapeXml;
 using report_detail::Figure;
 using report_detail::fmt;
+using report_detail::Marker;
 using report_detail::shellsJson;
-
-// A minimal SVG chart: a plot area with axes, ticks and labels, in data coordinates. Without
-// numeric x ticks, the caller labels the x axis (xLabel).
-class SvgChart {
- public:
-  SvgChart(const std::string& title, const std::string& x_label, const std::string& y_label,
-           double x0, double x1, double y0, double y1, bool x_ticks = true)
-      : x0_(x0), x1_(x1), y0_(y0), y1_(y1) {
-    body_ += "<text x='375' y='24' text-anchor='middle' font-size='15'>" + escapeXml(title) +
-             "</text>\n";
-    body_ += "<text x='375' y='492' text-anchor='middle' font-size='13'>" + escapeXml(x_label) +
-             "</text>\n";
-    body_ +=
-        "<text x='18' y='250' text-anchor='middle' font-size='13' transform='rotate(-90 18 250)'>" +
-        escapeXml(y_label) + "</text>\n";
-    body_ += fmt("<rect x='%g' y='%g' width='%g' height='%g' fill='none' stroke='black'/>\n", kLeft,
-                 kTop, kRight - kLeft, kBottom - kTop);
-    for (int i = 0; i <= 6; ++i) {
-      const double xv = x0 + (x1 - x0) * i / 6, yv = y0 + (y1 - y0) * i / 6;
-      if (x_ticks)
-        body_ += fmt("<text x='%g' y='%g' text-anchor='middle' font-size='11'>%.4g</text>\n",
-                     px(xv), kBottom + 16, xv);
-      body_ += fmt("<text x='%g' y='%g' text-anchor='end' font-size='11'>%.3g</text>\n", kLeft - 4,
-                   py(yv) + 4, yv);
-    }
-    if (y0 < 0 && y1 > 0)
-      body_ += fmt("<line x1='%g' y1='%g' x2='%g' y2='%g' stroke='#999'/>\n", kLeft, py(0), kRight,
-                   py(0));
-  }
-  double px(double x) const { return kLeft + (x - x0_) / (x1_ - x0_) * (kRight - kLeft); }
-  double py(double y) const { return kBottom - (y - y0_) / (y1_ - y0_) * (kBottom - kTop); }
-  void dot(double x, double y, const std::string& colour, double radius = 2.2) {
-    body_ +=
-        fmt("<circle cx='%.1f' cy='%.1f' r='%g' fill='", px(x), py(y), radius) + colour + "'/>\n";
-  }
-  void bar(double xa, double xb, double h, const std::string& fill = "#9ecae1",
-           const std::string& stroke = "#3182bd") {
-    body_ += fmt("<rect x='%.1f' y='%.1f' width='%.1f' height='%.1f' ", px(xa), py(h),
-                 px(xb) - px(xa), py(0) - py(h)) +
-             "fill='" + fill + "' stroke='" + stroke + "'/>\n";
-  }
-  void polyline(const std::vector<std::pair<double, double>>& points, const std::string& colour) {
-    body_ += "<polyline fill='none' stroke-width='2' stroke='" + colour + "' points='";
-    for (const auto& [x, y] : points) body_ += fmt("%.1f,%.1f ", px(x), py(y));
-    body_ += "'/>\n";
-  }
-  // A horizontal line across the plot at y, dashed, with a label at its right end.
-  void level(double y, const std::string& colour, const std::string& label) {
-    body_ += fmt("<line x1='%g' y1='%.1f' x2='%g' y2='%.1f' stroke-dasharray='6 4' ", kLeft, py(y),
-                 kRight, py(y)) +
-             "stroke='" + colour + "'/>\n";
-    body_ += fmt("<text x='%g' y='%.1f' font-size='11' fill='", kRight + 6, py(y) + 4) + colour +
-             "'>" + escapeXml(label) + "</text>\n";
-  }
-  void xLabel(double x, int line, const std::string& text) {
-    body_ += fmt("<text x='%.1f' y='%g' text-anchor='middle' font-size='10'>", px(x),
-                 kBottom + 14 + 12 * line) +
-             escapeXml(text) + "</text>\n";
-  }
-  void legend(int row, const std::string& text, const std::string& colour) {
-    const double y = kTop + 14 + 15 * row;
-    body_ += fmt("<circle cx='%g' cy='%g' r='4' fill='", kRight + 12, y - 4) + colour + "'/>\n";
-    body_ +=
-        fmt("<text x='%g' y='%g' font-size='11'>", kRight + 20, y) + escapeXml(text) + "</text>\n";
-  }
-  void note(int row, const std::string& text) {
-    body_ += fmt("<text x='%g' y='%g' font-size='12'>", kLeft + 8, kTop + 18 + 16 * row) +
-             escapeXml(text) + "</text>\n";
-  }
-  std::string svg() const {
-    return "<svg xmlns='http://www.w3.org/2000/svg' width='900' height='500' "
-           "viewBox='0 0 900 500' font-family='sans-serif'>\n"
-           "<rect width='900' height='500' fill='white'/>\n" +
-           body_ + "</svg>\n";
-  }
-
- private:
-  static constexpr double kLeft = 70, kRight = 680, kTop = 40, kBottom = 450;
-  double x0_, x1_, y0_, y1_;
-  std::string body_;
-};
-
-const std::vector<std::string> kPalette = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd",
-                                           "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf"};
+using report_detail::SvgChart;
 
 double symmetricLimit(const Eigen::VectorXd& r) {
   const double m = r.size() ? r.cwiseAbs().maxCoeff() : 1.0;
@@ -168,13 +88,18 @@ std::string sampleConnectionText(const Sample& s) {
          (s.extension_mm > 0 ? fmt(" +%.0f mm", s.extension_mm) : "");
 }
 
-// Figure 3: residual against longitude, one series per shell.
+// Figure 3: residual against longitude, one series per shell: one colour per connection, one
+// marker per bar extension.
 ojson longitudeFigure(const std::vector<Sample>& samples, const Eigen::VectorXd& r,
                       const std::string& title, std::string* svg) {
   const double lim = symmetricLimit(r);
-  SvgChart chart(title, "longitude (deg)", "residual (mm)", 0, 360, -lim, lim);
+  SvgChart chart(title, ChartAxis{"longitude (deg)", 0, 360, 45},
+                 ChartAxis{"residual (mm)", -lim, lim});
   std::map<int, ojson> series;
   std::map<int, std::string> names;
+  std::map<int, std::pair<std::string, double>> shell_looks;  // connection, extension
+  std::map<std::string, size_t> colours;
+  std::map<double, size_t> markers;
   for (size_t i = 0; i < samples.size(); ++i) {
     const Sample& s = samples[i];
     ojson& shell = series[s.shell];
@@ -182,15 +107,22 @@ ojson longitudeFigure(const std::vector<Sample>& samples, const Eigen::VectorXd&
     shell["lon_deg"].push_back(s.lon_deg);
     shell["residual_mm"].push_back(r[static_cast<Eigen::Index>(i)]);
     names[s.shell] = sampleConnectionText(s);
+    shell_looks[s.shell] = {connectionName({s.ball_index, s.chuck_index}), s.extension_mm};
+    markers.emplace(s.extension_mm, 0);
   }
+  for (const auto& [shell, look] : shell_looks) colours.emplace(look.first, colours.size());
+  size_t k = 0;
+  for (auto& [extension, index] : markers) index = k++;
   ojson out = {{"x", "lon_deg"}, {"y", "residual_mm"}, {"series", ojson::array()}};
   int row = 0;
   for (const auto& [shell, data] : series) {
-    const std::string& colour = kPalette[row % kPalette.size()];
-    for (size_t k = 0; k < data["lon_deg"].size(); ++k)
-      chart.dot(std::fmod(data["lon_deg"][k].get<double>() + 360.0, 360.0),
-                data["residual_mm"][k].get<double>(), colour);
-    chart.legend(row++, "shell " + std::to_string(shell) + " " + names[shell], colour);
+    const auto& [connection, extension] = shell_looks[shell];
+    const std::string& colour = report_detail::paletteColour(colours[connection]);
+    const Marker shape = report_detail::markerFor(markers[extension]);
+    for (size_t j = 0; j < data["lon_deg"].size(); ++j)
+      chart.marker(std::fmod(data["lon_deg"][j].get<double>() + 360.0, 360.0),
+                   data["residual_mm"][j].get<double>(), colour, shape);
+    chart.legend(row++, "shell " + std::to_string(shell) + " " + names[shell], colour, shape);
     out["series"].push_back({{"shell", shell},
                              {"connection", names[shell]},
                              {"lon_deg", data["lon_deg"]},
@@ -214,7 +146,8 @@ ojson histogramFigure(const Eigen::VectorXd& r, const std::string& title, std::s
   const double peak_normal = n * width / (sigma * std::sqrt(2 * std::numbers::pi));
   const double top = 1.15 * std::max<double>(*std::max_element(counts.begin(), counts.end()),
                                              std::isfinite(peak_normal) ? peak_normal : 0);
-  SvgChart chart(title, "residual (mm)", "samples per bin", -lim, lim, 0, top);
+  SvgChart chart(title, ChartAxis{"residual (mm)", -lim, lim},
+                 ChartAxis{"samples per bin (count)", 0, top, 0, 1});
   ojson bin_json = ojson::array();
   for (int b = 0; b < bins; ++b) {
     chart.bar(-lim + b * width, -lim + (b + 1) * width, counts[b]);
@@ -244,7 +177,9 @@ ojson shellFigure(const ShellTable& table, const std::string& title, std::string
   }
   top = std::max({top, kShellStandsOut * median_rms, 1e-6}) * 1.1;
   const double count = static_cast<double>(std::max<size_t>(shells.size(), 1));
-  SvgChart chart(title, "", "residual (mm)", -0.5, count - 0.5, 0, top, false);
+  SvgChart chart(title,
+                 ChartAxis{"shell, connection, bar extension (mm)", -0.5, count - 0.5, 0, 0, false},
+                 ChartAxis{"residual (mm)", 0, top});
   ojson out = ojson::array();
   for (size_t k = 0; k < shells.size(); ++k) {
     const ShellResiduals& s = shells[k];
