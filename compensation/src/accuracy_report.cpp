@@ -1,5 +1,6 @@
 #include <robocal/compensation/accuracy_report.hpp>
 
+#include <robocal/formats/axis_ticks.hpp>
 #include <robocal/formats/error.hpp>
 
 #include <algorithm>
@@ -30,15 +31,6 @@ std::string statsLine(const char* what, const ErrorStats& s, const char* unit, i
 }
 
 // A round step (1, 2 or 5 times a power of ten) that cuts `span` into about `parts`.
-double roundStep(double span, int parts) {
-  if (!(span > 0)) return 1;
-  const double raw = span / parts;
-  const double power = std::pow(10.0, std::floor(std::log10(raw)));
-  for (double m : {1.0, 2.0, 5.0, 10.0})
-    if (m * power >= raw) return m * power;
-  return 10 * power;
-}
-
 // Viridis-like ramp from dark blue (0) through green to yellow (1).
 std::string colour(double t) {
   t = std::clamp(t, 0.0, 1.0);
@@ -153,27 +145,28 @@ std::string accuracySvg(const AccuracyReport& r) {
     y0 = std::min(y0, t.y()), y1 = std::max(y1, t.y());
   }
   if (ok.empty()) x0 = y0 = 0, x1 = y1 = 1;
-  const double axis_step = roundStep(std::max(x1 - x0, y1 - y0), 5);
+  // One step on both axes: the map keeps its aspect.
+  const double axis_step = niceTicks(0, std::max(x1 - x0, y1 - y0), 5).step;
   x0 = std::floor(x0 / axis_step) * axis_step, x1 = std::ceil(x1 / axis_step) * axis_step;
   y0 = std::floor(y0 / axis_step) * axis_step, y1 = std::ceil(y1 / axis_step) * axis_step;
-  const double plot = 300, left = 60, top = 50, gap = 150;
+  const double plot = 300, left = 60, top = 70, gap = 150;
   const double scale = plot / std::max(x1 - x0, y1 - y0);
   const double width = left + panels.size() * (plot + gap), height = top + plot + 60;
   std::string svg =
       fmt("<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" "
           "font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%%\" height=\"100%%\" "
           "fill=\"white\"/>\n",
-          std::max(width, 400.0), height);
+          std::max(width, 480.0), height);  // the title fits
   svg +=
       "<text x=\"10\" y=\"20\" font-size=\"14\">Tool position error over the work volume, "
-      "seen from above (" +
-      std::to_string(ok.size()) + " poses; world frame = chuck fixture)</text>\n";
+      "seen from above</text>\n<text x=\"10\" y=\"38\">" +
+      std::to_string(ok.size()) + " poses; world frame = chuck fixture</text>\n";
   for (size_t k = 0; k < panels.size(); ++k) {
     const double ox = left + k * (plot + gap);
     double vmax = 0;
     for (const PoseAccuracy* p : ok) vmax = std::max(vmax, panels[k].value(*p));
-    const double cstep = roundStep(vmax, 4);
-    const double cmax = std::max(cstep, std::ceil(vmax / cstep) * cstep);
+    const AxisTicks colour_ticks = niceTicks(0, vmax > 0 ? vmax : 1e-3, 4);
+    const double cmax = colour_ticks.last();
     svg += fmt("<text x=\"%.0f\" y=\"%.0f\" font-size=\"13\">", ox, top - 10) + panels[k].title +
            "</text>\n";
     svg +=
@@ -209,9 +202,9 @@ std::string accuracySvg(const AccuracyReport& r) {
       svg += fmt("<rect x=\"%.0f\" y=\"%.1f\" width=\"14\" height=\"%.1f\" ", bx,
                  top + plot - (i + 1) * plot / 50, plot / 50 + 0.5) +
              "fill=\"" + colour((i + 0.5) / 50) + "\"/>\n";
-    for (double v = 0; v <= cmax + 1e-12; v += cstep)
-      svg += fmt("<text x=\"%.0f\" y=\"%.1f\">%g</text>\n", bx + 18,
-                 top + plot - v / cmax * plot + 4, v);
+    for (double v : colour_ticks.values())
+      svg += fmt("<text x=\"%.0f\" y=\"%.1f\">", bx + 18, top + plot - v / cmax * plot + 4) +
+             colour_ticks.label(v) + "</text>\n";
     svg += fmt("<text x=\"%.0f\" y=\"%.0f\">mm</text>\n", bx, top + plot + 15);
   }
   svg += "</svg>\n";
