@@ -2,8 +2,8 @@
 #   start_sim_cell BUILD OUT MODEL CELL [more robocal-cellsim options]
 # Starts robocal-cellsim with OUT/truth.json as the true robot (bar 150 mm, +/-2 mm of LVDT travel,
 # 0.06 mm reading noise, motion 100 times faster; pty links and control socket in OUT), then
-# robocald on a free port with OUT/plan.json as its plan (settle and bar window 0.03 s). Appends
-# both pids to the caller's `pids`, sets `daemon_pid` and `port`, exports ROBOCAL_TOKEN_FILE.
+# robocald on a free port (and its console on another) with OUT/plan.json as its plan (settle and bar window 0.03 s). Appends
+# both pids to the caller's `pids`, sets `daemon_pid`, `port` and `web_port`, exports ROBOCAL_TOKEN_FILE.
 # Returns 1 (with robocald's log on stderr) when robocald does not listen.
 start_sim_cell() {
   local build=$1 out=$2 model=$3 cell=$4
@@ -16,7 +16,7 @@ start_sim_cell() {
   for _ in $(seq 100); do grep -q ready "$out/cellsim.log" && break; sleep 0.1; done
   cat >"$out/robocald.json" <<JSON
 {
-  "listen_address": "127.0.0.1", "port": 0, "data_dir": "$out/data",
+  "listen_address": "127.0.0.1", "port": 0, "web_port": 0, "data_dir": "$out/data",
   "model": "$model", "cell": "$cell", "plan": "$out/plan.json",
   "settle_s": 0.03, "bar_window_s": 0.03, "bar_soft_limit_mm": 1.0, "bar_hard_limit_mm": 1.6,
   "drivers": {
@@ -29,7 +29,8 @@ JSON
   daemon_pid=$!
   pids+=("$daemon_pid")
   for _ in $(seq 100); do grep -q listening "$out/robocald.out" && break; sleep 0.1; done
-  port=$(awk '/listening/ {print $3}' "$out/robocald.out")
+  port=$(awk '/^listening/ {print $3}' "$out/robocald.out")
+  web_port=$(awk '/^web/ {print $3}' "$out/robocald.out")
   if [[ -z $port ]]; then
     echo "robocald did not start:" >&2
     cat "$out/robocald.log" >&2

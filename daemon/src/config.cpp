@@ -44,6 +44,10 @@ DaemonConfig daemonConfigFromJson(const json& root, const std::string& source,
   r.get("centering", c.centering);
   r.get("connection_check_mm", c.connection_check_mm, 0, 5);
   r.get("detached_change_mm", c.detached_change_mm, 0.01, 100);
+  r.get("web_address", c.web_address);
+  r.get("web_port", c.web_port, -1, 65535);
+  r.get("max_browsers", c.max_browsers, 1, 1000);
+  r.get("web_allowed_origins", c.web_allowed_origins);
   r.get("max_clients", c.max_clients, 1, 10000);
   r.get("max_line_bytes", c.max_line_bytes, 256, 16 * 1024 * 1024);
   r.get("client_queue_max", c.client_queue_max, 16, 1000000);
@@ -65,6 +69,8 @@ DaemonConfig daemonConfigFromJson(const json& root, const std::string& source,
   if (c.model.empty()) r.fail("model", "missing: the nominal model file is required");
   if (c.cell.empty() && c.plan.empty())
     r.fail("cell", "missing: a cell file (or a fixed plan) is required");
+  if (c.web_port > 0 && c.web_port == c.port && c.web_address == c.listen_address)
+    r.fail("web_port", "must differ from port (" + std::to_string(c.port) + ")");
   if (c.bar_soft_limit_mm >= c.bar_hard_limit_mm)
     r.fail("bar_soft_limit_mm", "must be below bar_hard_limit_mm");
   if (c.check_warn_ratio > c.check_fail_ratio)

@@ -5,8 +5,10 @@
 #include <robocal/build_info.hpp>
 #include <robocal/daemon/client_hub.hpp>
 #include <robocal/daemon/config.hpp>
+#include <robocal/daemon/metrics.hpp>
 #include <robocal/daemon/run.hpp>
 #include <robocal/daemon/token.hpp>
+#include <robocal/daemon/web_server.hpp>
 #include <robocal/formats/model_json.hpp>
 #include <robocal/planner/cell_json.hpp>
 #include <robocal/planner/check.hpp>
@@ -82,6 +84,17 @@ HubLimits hubLimits(const DaemonConfig& c) {
   return limits;
 }
 
+WebLimits webLimits(const DaemonConfig& c) {
+  WebLimits limits;
+  limits.max_browsers = c.max_browsers;
+  limits.max_message_bytes = c.max_line_bytes;
+  limits.queue_max = c.client_queue_max;
+  limits.stall_s = c.client_stall_s;
+  limits.request_timeout_s = c.request_timeout_s;
+  limits.allowed_origins = c.web_allowed_origins;
+  return limits;
+}
+
 class Daemon {
  public:
   Daemon(asio::io_context& io, DaemonConfig config)
@@ -97,9 +110,13 @@ class Daemon {
         run_(config_, nominal_, cell_, [this](json object, bool droppable) {
           // From the run and solver threads into the event loop.
           asio::post(io_, [this, object = std::move(object), droppable] {
+            metrics_.observe(object);
             hub_.broadcast(object, droppable);
+            if (web_) web_->broadcast(object.dump(), droppable);
           });
-        }) {}
+        }) {
+    if (config_.web_port >= 0) web_.emplace(io_, webLimits(config_), webHandlers());
+  }
 
   // A plan being made when the daemon stops is awaited: its thread uses the daemon's members.
   ~Daemon() {
@@ -111,43 +128,79 @@ class Daemon {
   unsigned short listen() {
     return hub_.listen(config_.listen_address, static_cast<unsigned short>(config_.port));
   }
+  // The console's port, when configured.
+  std::optional<unsigned short> listenWeb() {
+    if (!web_) return std::nullopt;
+    return web_->listen(config_.web_address, static_cast<unsigned short>(config_.web_port));
+  }
 
  private:
+  WebServer::Handlers webHandlers() {
+    WebServer::Handlers h;
+    h.on_line = [this](WebServer::ClientId id, const std::string& line) { onLine(id, line); };
+    h.greeting = [] { return proto::versionObject(build::kVersion); };
+    h.metrics = [this] {
+      return metrics_.text(status(), run_.result(), web_ ? web_->browserCount() : 0);
+    };
+    h.settings = [this] {
+      return json{{"bar_soft_limit_mm", config_.bar_soft_limit_mm},
+                  {"bar_hard_limit_mm", config_.bar_hard_limit_mm},
+                  {"release", build::kVersion}};
+    };
+    return h;
+  }
+
+  // One id space for both transports: browsers' ids are WebServer's.
+  void send(ClientHub::ClientId id, const json& object) {
+    if (WebServer::owns(id)) {
+      if (web_) web_->send(id, object);
+    } else {
+      hub_.send(id, object);
+    }
+  }
+  void setWatching(ClientHub::ClientId id, bool watching) {
+    if (WebServer::owns(id)) {
+      if (web_) web_->setWatching(id, watching);
+    } else {
+      hub_.setWatching(id, watching);
+    }
+  }
+
   void onLine(ClientHub::ClientId id, const std::string& line) {
     proto::Request req;
     try {
       req = proto::parseRequest(line);
     } catch (const proto::RequestError& e) {
-      hub_.send(id, proto::errorObject(e.what(), e.cmd()));
+      send(id, proto::errorObject(e.what(), e.cmd()));
       return;
     }
     const std::string cmd = proto::cmdName(req.cmd);
     if (proto::needsToken(req.cmd) && !sameToken(req.token, token_)) {
       spdlog::warn("client {}: {} refused: {}", id, cmd,
                    req.token.empty() ? "no token" : "wrong token");
-      hub_.send(id, proto::errorObject(req.token.empty() ? cmd + " needs the token (\"token\": ...)"
-                                                         : "wrong token for " + cmd,
-                                       cmd));
+      send(id, proto::errorObject(req.token.empty() ? cmd + " needs the token (\"token\": ...)"
+                                                    : "wrong token for " + cmd,
+                                  cmd));
       return;
     }
     auto reply = [this, id, &req](const std::string& error, const std::string& ok_message = {}) {
-      hub_.send(id, error.empty() ? proto::ackObject(req.cmd, ok_message)
-                                  : proto::errorObject(error, proto::cmdName(req.cmd)));
+      send(id, error.empty() ? proto::ackObject(req.cmd, ok_message)
+                             : proto::errorObject(error, proto::cmdName(req.cmd)));
     };
     switch (req.cmd) {
       case proto::Cmd::kStatus:
-        hub_.send(id, status());
+        send(id, status());
         break;
       case proto::Cmd::kWatch:
-        hub_.setWatching(id, req.watch_enable);
-        hub_.send(id, proto::toJson(proto::Watch{req.watch_enable}));
-        if (req.watch_enable) hub_.send(id, status());
+        setWatching(id, req.watch_enable);
+        send(id, proto::toJson(proto::Watch{req.watch_enable}));
+        if (req.watch_enable) send(id, status());
         break;
       case proto::Cmd::kResult:
-        hub_.send(id, run_.result());
+        send(id, run_.result());
         break;
       case proto::Cmd::kRuns:
-        hub_.send(id, run_.runs());
+        send(id, run_.runs());
         break;
       case proto::Cmd::kPlan:
         makePlan(id, req.plan_path, req.cell_path, req.check, false);
@@ -162,7 +215,7 @@ class Daemon {
         } else if (!req.plan_path.empty() || !plan_)
           makePlan(id, req.plan_path, {}, false, true);
         else {
-          hub_.send(id, planObject(*plan_, plan_source_));  // the plan the run will follow
+          send(id, planObject(*plan_, plan_source_));  // the plan the run will follow
           reply(run_.start(*plan_), "run starting with " + plan_source_);
         }
         break;
@@ -184,7 +237,7 @@ class Daemon {
         break;
       }
       case proto::Cmd::kModels:
-        hub_.send(id, proto::toJson(run_.models().list()));
+        send(id, proto::toJson(run_.models().list()));
         break;
       case proto::Cmd::kActivate:
         reply(run_.models().activate(req.model_version), "model version " +
@@ -192,10 +245,10 @@ class Daemon {
                                                              " is active: compensate uses it");
         break;
       case proto::Cmd::kCompensate:
-        hub_.send(id, compensateRequest(run_.models(), nominal_, req));
+        send(id, compensateRequest(run_.models(), nominal_, req));
         break;
       case proto::Cmd::kCheckResult:
-        hub_.send(id, run_.checkResult());
+        send(id, run_.checkResult());
         break;
     }
   }
@@ -203,7 +256,7 @@ class Daemon {
   // The run's STATUS with what the daemon itself knows: its clients and its plan.
   json status() const {
     proto::Status s = run_.status();
-    s.clients = static_cast<int>(hub_.clientCount());
+    s.clients = static_cast<int>(hub_.clientCount()) + (web_ ? web_->browserCount() : 0);
     s.client_counts = hub_.counts();
     if (plan_) s.plan = planSummary(*plan_, plan_source_);
     return proto::toJson(s);
@@ -214,7 +267,7 @@ class Daemon {
   void makePlan(ClientHub::ClientId id, const std::string& plan_path, const std::string& cell_path,
                 bool check, bool then_start) {
     if (planning_) {
-      hub_.send(id, proto::errorObject("a plan is being made; try again in a moment", "plan"));
+      send(id, proto::errorObject("a plan is being made; try again in a moment", "plan"));
       return;
     }
     planning_ = true;
@@ -256,17 +309,16 @@ class Daemon {
         if (!error.empty()) {
           json e = proto::errorObject(error, then_start ? "start" : "plan");
           if (!violation_list.empty()) e["violations"] = violation_list;
-          hub_.send(id, e);
+          send(id, e);
           return;
         }
         plan_ = std::move(plan);
         plan_source_ = source;
-        hub_.send(id, planObject(*plan_, plan_source_));
+        send(id, planObject(*plan_, plan_source_));
         if (then_start) {
           const std::string err = run_.start(*plan_);
-          hub_.send(id, err.empty()
-                            ? proto::ackObject(proto::Cmd::kStart, "run starting with " + source)
-                            : proto::errorObject(err, "start"));
+          send(id, err.empty() ? proto::ackObject(proto::Cmd::kStart, "run starting with " + source)
+                               : proto::errorObject(err, "start"));
         }
       });
     });
@@ -278,6 +330,8 @@ class Daemon {
   std::optional<CellConfig> cell_;
   std::string token_;
   ClientHub hub_;
+  Metrics metrics_;               // fed on the event loop, before hub_ and web_ see the object
+  std::optional<WebServer> web_;  // the console and /metrics (web_port >= 0)
   RunController run_;
   std::optional<Plan> plan_;
   std::string plan_source_;
@@ -342,6 +396,10 @@ int main(int argc, char** argv) {
     const unsigned short port = daemon.listen();
     spdlog::info("robocald {} listening on {}:{}", build::kVersion, config.listen_address, port);
     std::printf("listening %s %u\n", config.listen_address.c_str(), port);
+    if (const auto web_port = daemon.listenWeb()) {
+      spdlog::info("console and /metrics on http://{}:{}/", config.web_address, *web_port);
+      std::printf("web %s %u\n", config.web_address.c_str(), *web_port);
+    }
     std::fflush(stdout);
 
     asio::signal_set signals(io, SIGINT, SIGTERM);

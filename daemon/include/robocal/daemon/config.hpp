@@ -6,6 +6,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace robocal::daemon {
 
@@ -40,6 +41,12 @@ struct DaemonConfig {
   // A reading that changes this much while the robot moves with the bar believed detached stops
   // the robot: the bar is still attached.
   double detached_change_mm = 0.25;
+  // The browser console and /metrics (docs/console.md): its own port, -1 (the default when the
+  // key is absent) for none, 0 for any free one (printed at start as "web ADDRESS PORT").
+  std::string web_address = "127.0.0.1";
+  int web_port = -1;
+  int max_browsers = 32;
+  std::vector<std::string> web_allowed_origins;  // besides the page's own
   int max_clients = 64;
   std::size_t max_line_bytes = 16 * 1024;
   std::size_t client_queue_max = 4096;  // messages queued to one client; past it readings drop
