@@ -57,6 +57,8 @@ void DaemonProcess::start() {
     unsigned port = 0;
     if (in >> word >> address >> port && word == "listening") {
       port_ = static_cast<unsigned short>(port);
+      if (in >> word >> address >> port && word == "web")
+        web_port_ = static_cast<unsigned short>(port);
       return;
     }
     if (!running()) throw std::runtime_error("robocald exited at start: " + logText());

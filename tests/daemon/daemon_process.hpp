@@ -25,6 +25,7 @@ class DaemonProcess {
   int stop();    // SIGTERM and wait: the exit code (128 + signal when killed by one, -1 if hung)
   bool running();
   unsigned short port() const { return port_; }
+  unsigned short webPort() const { return web_port_; }  // 0 without web_port in the config
   const std::string& dir() const { return dir_; }
   std::string dataDir() const { return dir_ + "/data"; }
   std::string token() const;
@@ -36,6 +37,7 @@ class DaemonProcess {
   std::string dir_;
   int pid_ = -1;
   unsigned short port_ = 0;
+  unsigned short web_port_ = 0;
 };
 
 // A small cell for tests: three or more connections on a coarse grid.
