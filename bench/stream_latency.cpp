@@ -37,7 +37,11 @@
 //   --cellsim PATH, --robocald PATH   [next to this binary in the build tree]
 //   --model FILE, --cell FILE         [config/puma560.json, config/cell.json of the sources]
 //   --work-dir DIR         logs and configs kept there        [a fresh folder in /tmp, removed]
+//   --browsers N           also N WebSocket watchers on robocald's web port (the console's
+//                          browsers, bench/browser_load.hpp)                         [0]
 //   --json                 one JSON object on stdout instead of the table
+#include "browser_load.hpp"
+
 #include <nlohmann/json.hpp>
 
 #include <arpa/inet.h>
@@ -76,6 +80,7 @@
 #include <string>
 #include <string_view>
 #include <thread>
+#include <tuple>
 #include <vector>
 
 #ifndef ROBOCAL_SOURCE_DIR
@@ -108,6 +113,7 @@ struct Options {
   int daemon_nice = 0;  // 0: as this process
   int bench_slice_us = 0;
   bool json_output = false;
+  int browsers = 0;  // WebSocket watchers on the web port besides the TCP ones
 };
 
 // Asks for a short EEVDF time slice for this thread (Linux 6.12+; ignored before): an early
@@ -399,6 +405,9 @@ struct Result {
   long stuck_kernel_received_bytes = -1;    // waiting unread in its receive queue, at the end
   long stuck_daemon_send_queue_bytes = -1;  // in the daemon's kernel send queue, at the end
   long status_clients_min = -1, status_clients_max = -1;
+  int browsers = 0;
+  long browser_received_min = 0, browser_received_max = 0;
+  int browsers_closed = 0;
 };
 
 std::int64_t percentile(std::vector<std::int64_t>& v, double q) {
@@ -436,6 +445,10 @@ Result runConfig(const Options& o, int watchers, Stuck stuck_kind) {
       {"drivers",
        {{"val", {{"serial", {{"path", (dir / "val").string()}}}}},
         {"bar", {{"serial", {{"path", (dir / "bar").string()}}}, {"mode", "streamed"}}}}}};
+  if (o.browsers > 0) {
+    config["web_port"] = 0;
+    config["max_browsers"] = o.browsers + 4;
+  }
   if (o.client_stall_s > 0) config["client_stall_s"] = o.client_stall_s;
   if (o.client_queue_max > 0) config["client_queue_max"] = o.client_queue_max;
   std::ofstream(dir / "robocald.json") << config.dump(2) << "\n";
@@ -444,6 +457,12 @@ Result runConfig(const Options& o, int watchers, Stuck stuck_kind) {
                (dir / "robocald.out").string(), daemon_log, o.daemon_nice);
   std::string listening = daemon.waitForLine("listening", 20);
   const auto port = static_cast<unsigned short>(std::stoi(listening.substr(listening.rfind(' '))));
+  std::unique_ptr<robocal::bench::BrowserLoad> browsers;
+  if (o.browsers > 0) {
+    const std::string web = daemon.waitForLine("web ", 20);
+    browsers = std::make_unique<robocal::bench::BrowserLoad>(
+        static_cast<unsigned short>(std::stoi(web.substr(web.rfind(' ')))), o.browsers);
+  }
 
   // Clients.
   std::vector<std::unique_ptr<Conn>> conns;
@@ -685,6 +704,12 @@ Result runConfig(const Options& o, int watchers, Stuck stuck_kind) {
   }
   for (const auto& c : conns) ::close(c->fd);
   ::close(ep);
+  if (browsers) {
+    r.browsers = o.browsers;
+    std::tie(r.browser_received_min, r.browser_received_max) = browsers->received();
+    r.browsers_closed = browsers->closed();
+    browsers.reset();
+  }
   daemon.stop();
   cellsim.stop();
   return r;
@@ -735,7 +760,11 @@ json toJson(const Result& r) {
           {"stuck_closed_after_s", r.stuck_closed_after_s},
           {"stuck_reason", r.stuck_reason},
           {"stuck_kernel_received_bytes", r.stuck_kernel_received_bytes},
-          {"stuck_daemon_send_queue_bytes", r.stuck_daemon_send_queue_bytes}};
+          {"stuck_daemon_send_queue_bytes", r.stuck_daemon_send_queue_bytes},
+          {"browsers", r.browsers},
+          {"browser_received_min", r.browser_received_min},
+          {"browser_received_max", r.browser_received_max},
+          {"browsers_closed", r.browsers_closed}};
 }
 
 void printTable(const Options& o, const std::vector<Result>& results) {
@@ -775,6 +804,9 @@ void printTable(const Options& o, const std::vector<Result>& results) {
         static_cast<long long>(r.first_p50_us), static_cast<long long>(r.first_p99_us),
         static_cast<long long>(r.last_p50_us), static_cast<long long>(r.last_p99_us),
         static_cast<long long>(r.p999_us));
+    if (r.browsers > 0)
+      std::printf("  %d browsers (WebSocket watchers): %ld..%ld messages each, %d closed\n",
+                  r.browsers, r.browser_received_min, r.browser_received_max, r.browsers_closed);
     if (r.stuck == Stuck::kNone) continue;
     char buffers[64] = "system default buffers";
     if (r.stuck == Stuck::kSmallBuffer)
@@ -856,6 +888,8 @@ int main(int argc, char** argv) {
         o.cell = value();
       } else if (a == "--work-dir") {
         o.work_dir = value();
+      } else if (a == "--browsers") {
+        o.browsers = std::stoi(value());
       } else if (a == "--json") {
         o.json_output = true;
       } else if (a == "--help" || a == "-h") {
