@@ -37,7 +37,7 @@ budget=()
 echo
 echo "== robocal-cellsim (VAL II and ball-bar on pseudo-terminals) and robocald"
 start_sim_cell "$build" "$out" "$model" "$cell"
-echo "robocald on 127.0.0.1:$port; cellsim control $out/cellsim.sock"
+echo "robocald on 127.0.0.1:$port, its console on http://127.0.0.1:$web_port/; cellsim control $out/cellsim.sock"
 echo
 echo "== the run (the simulated operator answers each prompt)"
 "$bin" watch --port "$port" --operator-cellsim "$out/cellsim.sock" --until done,paused,aborted,error \
