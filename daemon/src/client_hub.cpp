@@ -59,12 +59,16 @@ ClientHub::~ClientHub() {
   for (auto& [id, c] : clients_) c->socket.close(ec);
 }
 
-unsigned short ClientHub::listen(const std::string& address, unsigned short port) {
+void bindAndListen(tcp::acceptor& acceptor, const std::string& address, unsigned short port) {
   const tcp::endpoint endpoint(asio::ip::make_address(address), port);
-  acceptor_.open(endpoint.protocol());
-  acceptor_.set_option(tcp::acceptor::reuse_address(true));
-  acceptor_.bind(endpoint);
-  acceptor_.listen();
+  acceptor.open(endpoint.protocol());
+  acceptor.set_option(tcp::acceptor::reuse_address(true));
+  acceptor.bind(endpoint);
+  acceptor.listen();
+}
+
+unsigned short ClientHub::listen(const std::string& address, unsigned short port) {
+  bindAndListen(acceptor_, address, port);
   accept();
   checkStalls();
   return acceptor_.local_endpoint().port();
@@ -230,7 +234,7 @@ void ClientHub::write(const std::shared_ptr<Client>& c) {
                              });
 }
 
-void ClientHub::close(const std::shared_ptr<Client>& c, const std::string& why) {
+void ClientHub::close(std::shared_ptr<Client> c, const std::string& why) {
   if (c->closed) return;
   c->closed = true;
   boost::system::error_code ec;

@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <cstdio>
+#include <utility>
+#include <vector>
 
 namespace robocal::daemon {
 
@@ -39,14 +41,25 @@ class Exposition {
     out_ += "# HELP " + name + " " + help + "\n# TYPE " + name + " " + type + "\n";
     return *this;
   }
-  Exposition& sample(double value, const std::string& label = {}, const std::string& v = {}) {
+  using Labels = std::vector<std::pair<std::string, std::string>>;
+  Exposition& sample(double value, const Labels& labels = {}) {
     out_ += name_;
-    if (!label.empty()) out_ += "{" + label + "=\"" + labelValue(v) + "\"}";
+    for (size_t k = 0; k < labels.size(); ++k)
+      out_ += (k ? "," : "{") + labels[k].first + "=\"" + labelValue(labels[k].second) + "\"" +
+              (k + 1 == labels.size() ? "}" : "");
     out_ += " " + number(value) + "\n";
     return *this;
   }
-  Exposition& counts(const std::map<std::string, long>& m, const std::string& label) {
-    for (const auto& [k, n] : m) sample(static_cast<double>(n), label, k);
+  Exposition& sample(double value, const std::string& label, const std::string& v) {
+    return sample(value, Labels{{label, v}});
+  }
+  Exposition& counts(const std::map<std::string, long>& m, const std::string& label,
+                     const Labels& more = {}) {
+    for (const auto& [k, n] : m) {
+      Labels labels = more;
+      labels.emplace_back(label, k);
+      sample(static_cast<double>(n), labels);
+    }
     return *this;
   }
   std::string str() const { return out_; }
@@ -86,14 +99,14 @@ void Metrics::observe(const json& object) {
   }
 }
 
-std::string Metrics::text(const json& status, const json& result, int web_clients) const {
+std::string Metrics::text(const json& status, const json& result, const Clients& clients) const {
   Exposition e;
   const std::string state = status.value("state", "");
   e.family("robocal_run_state", "gauge", "1 for the run's current state, 0 for the others.");
   for (const char* s : kStates) e.sample(state == s ? 1 : 0, "state", s);
   e.family("robocal_points_done", "gauge", "Data points measured in the current run.")
       .sample(numberOr(status, "points_done", 0));
-  e.family("robocal_points_total", "gauge", "Data points in the current run's plan.")
+  e.family("robocal_plan_points", "gauge", "Data points in the current run's plan.")
       .sample(numberOr(status, "points_total", 0));
   e.family("robocal_shell", "gauge", "The shell the run is on (0: none).")
       .sample(numberOr(status, "shell", 0));
@@ -126,15 +139,20 @@ std::string Metrics::text(const json& status, const json& result, int web_client
       .sample(devices.value("val", false) ? 1 : 0, "device", "val")
       .sample(devices.value("bar", false) ? 1 : 0, "device", "bar");
   e.family("robocal_clients", "gauge", "Connected clients, by transport.")
-      .sample(numberOr(status, "clients", 0), "transport", "tcp")
-      .sample(web_clients, "transport", "web");
+      .sample(clients.tcp, "transport", "tcp")
+      .sample(clients.web, "transport", "web");
   const json counts = status.value("client_counts", json::object());
-  std::map<std::string, long> client_events;
+  std::map<std::string, long> tcp_events;
   for (const auto& [k, v] : counts.items())
-    if (v.is_number()) client_events[k] = v.get<long>();
+    if (v.is_number()) tcp_events[k] = v.get<long>();
+  const std::map<std::string, long> web_events = {
+      {"refused", clients.web_counts.refused},
+      {"stalled", clients.web_counts.stalled},
+      {"dropped_lines", clients.web_counts.dropped_lines}};
   e.family("robocal_client_events_total", "counter",
            "Clients refused, closed as stuck or timed out, and readings dropped for slow ones.")
-      .counts(client_events, "kind");
+      .counts(tcp_events, "kind", {{"transport", "tcp"}})
+      .counts(web_events, "kind", {{"transport", "web"}});
   if (result.value("available", true) && result.contains("rms_mm")) {
     e.family("robocal_fit_rms_mm", "gauge", "The latest fit's residual RMS, mm.")
         .sample(numberOr(result, "rms_mm", NAN));

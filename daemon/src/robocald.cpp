@@ -112,7 +112,7 @@ class Daemon {
           asio::post(io_, [this, object = std::move(object), droppable] {
             metrics_.observe(object);
             hub_.broadcast(object, droppable);
-            if (web_) web_->broadcast(object.dump(), droppable);
+            if (web_ && web_->anyWatching()) web_->broadcast(proto::frame(object), droppable);
           });
         }) {
     if (config_.web_port >= 0) web_.emplace(io_, webLimits(config_), webHandlers());
@@ -140,7 +140,11 @@ class Daemon {
     h.on_line = [this](WebServer::ClientId id, const std::string& line) { onLine(id, line); };
     h.greeting = [] { return proto::versionObject(build::kVersion); };
     h.metrics = [this] {
-      return metrics_.text(status(), run_.result(), web_ ? web_->browserCount() : 0);
+      Metrics::Clients clients;
+      clients.tcp = static_cast<int>(hub_.clientCount());
+      clients.web = web_->browserCount();
+      clients.web_counts = web_->counts();
+      return metrics_.text(status(), run_.result(), clients);
     };
     h.settings = [this] {
       return json{{"bar_soft_limit_mm", config_.bar_soft_limit_mm},

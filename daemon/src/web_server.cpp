@@ -2,6 +2,9 @@
 
 #include "console_page.hpp"
 
+#include <robocal/daemon/client_hub.hpp>
+#include <robocal/proto/protocol.hpp>
+
 #include <spdlog/spdlog.h>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
@@ -24,6 +27,19 @@ namespace {
 
 constexpr int kMaxHttpConnections = 64;
 constexpr std::size_t kMaxRequestBytes = 8 * 1024;
+constexpr int kMaxLinesPerMessage = 16;
+
+// The host part of a Host header or an origin's authority: "[::1]:7688" -> "::1",
+// "cell7.plant.local:7688" -> "cell7.plant.local".
+std::string hostName(std::string authority) {
+  if (const auto scheme = authority.find("://"); scheme != std::string::npos)
+    authority.erase(0, scheme + 3);
+  if (!authority.empty() && authority.front() == '[') {
+    const auto end = authority.find(']');
+    return authority.substr(1, end == std::string::npos ? std::string::npos : end - 1);
+  }
+  return authority.substr(0, authority.find(':'));
+}
 
 std::chrono::steady_clock::duration seconds(double s) {
   return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
@@ -38,7 +54,6 @@ struct WebServer::Http {
   beast::flat_buffer buffer;
   std::optional<http::request_parser<http::string_body>> parser;
   std::string peer;
-  bool counted = true;  // in http_open_
 };
 
 // One browser's WebSocket.
@@ -49,6 +64,7 @@ struct WebServer::Session {
   std::string peer;
   beast::flat_buffer in;
   std::deque<std::string> queue;
+  std::size_t queued_bytes = 0;
   bool writing = false, watching = false, closed = false;
   Clock::time_point last_progress = Clock::now();
   long dropped = 0;
@@ -72,11 +88,7 @@ WebServer::~WebServer() {
 }
 
 unsigned short WebServer::listen(const std::string& address, unsigned short port) {
-  const tcp::endpoint endpoint(asio::ip::make_address(address), port);
-  acceptor_.open(endpoint.protocol());
-  acceptor_.set_option(tcp::acceptor::reuse_address(true));
-  acceptor_.bind(endpoint);
-  acceptor_.listen();
+  bindAndListen(acceptor_, address, port);
   accept();
   checkStalls();
   return acceptor_.local_endpoint().port();
@@ -118,6 +130,7 @@ void WebServer::readRequest(const std::shared_ptr<Http>& h) {
                        return;
                      }
                      const auto& req = h->parser->get();
+                     if (!hostAllowed(std::string(req[http::field::host]))) return respond(h);
                      if (websocket::is_upgrade(req) && req.target() == "/ws")
                        upgrade(h);
                      else
@@ -139,7 +152,13 @@ void WebServer::respond(const std::shared_ptr<Http>& h) {
     res->set(http::field::content_type, type);
     res->body() = std::move(body);
   };
-  if (req.method() != http::verb::get && req.method() != http::verb::head) {
+  const std::string host(req[http::field::host]);
+  if (!hostAllowed(host)) {
+    answer(http::status::misdirected_request, "text/plain; charset=utf-8",
+           "Host \"" + host +
+               "\" is not this cell's: use its address, or list the name in web_allowed_origins\n");
+    res->keep_alive(false);
+  } else if (req.method() != http::verb::get && req.method() != http::verb::head) {
     answer(http::status::method_not_allowed, "text/plain; charset=utf-8",
            "robocald's web port serves GET only; actions go over the WebSocket (/ws)\n");
     res->set(http::field::allow, "GET, HEAD");
@@ -148,11 +167,12 @@ void WebServer::respond(const std::shared_ptr<Http>& h) {
     // The page's own script and style only; nothing is fetched from elsewhere.
     res->set("Content-Security-Policy",
              "default-src 'none'; script-src 'unsafe-inline'; style-src 'unsafe-inline'; "
-             "img-src 'self' data:; connect-src 'self'; base-uri 'none'; form-action 'none'");
+             "img-src 'self' data:; connect-src 'self'; base-uri 'none'; form-action 'none'; "
+             "frame-ancestors 'none'");
   } else if (target == "/metrics") {
     answer(http::status::ok, "text/plain; version=0.0.4; charset=utf-8", handlers_.metrics());
   } else if (target == "/console.json") {
-    answer(http::status::ok, "application/json", handlers_.settings().dump() + "\n");
+    answer(http::status::ok, "application/json", proto::frame(handlers_.settings()));
   } else {
     answer(http::status::not_found, "text/plain; charset=utf-8",
            "not found: " + target + " (robocald serves /, /metrics, /console.json and /ws)\n");
@@ -170,6 +190,16 @@ void WebServer::respond(const std::shared_ptr<Http>& h) {
     }
     readRequest(h);
   });
+}
+
+bool WebServer::hostAllowed(const std::string& host) const {
+  const std::string name = hostName(host);
+  boost::system::error_code ec;
+  asio::ip::make_address(name, ec);
+  if (!ec || name == "localhost") return true;  // an address: no name to rebind
+  for (const std::string& o : limits_.allowed_origins)
+    if (hostName(o) == name) return true;
+  return false;
 }
 
 bool WebServer::originAllowed(const std::string& origin, const std::string& host) const {
@@ -200,10 +230,11 @@ void WebServer::upgrade(const std::shared_ptr<Http>& h) {
   if (!originAllowed(origin, host))
     return refuse(http::status::forbidden, "origin " + origin + " is not this console's (" + host +
                                                ") nor in web_allowed_origins");
-  if (static_cast<int>(sessions_.size()) >= limits_.max_browsers)
+  if (static_cast<int>(sessions_.size()) + handshaking_ >= limits_.max_browsers)
     return refuse(http::status::service_unavailable,
                   "too many browsers (max_browsers " + std::to_string(limits_.max_browsers) + ")");
   --http_open_;  // from here a WebSocket
+  ++handshaking_;
   h->stream.expires_never();
   auto s = std::make_shared<Session>(h->stream.release_socket());
   s->peer = h->peer;
@@ -212,6 +243,7 @@ void WebServer::upgrade(const std::shared_ptr<Http>& h) {
   s->ws.text(true);
   // The request is kept alive by the parser in h until the handshake completes.
   s->ws.async_accept(req, [this, h, s](const beast::error_code& ec) {
+    --handshaking_;
     if (ec) {
       spdlog::info("browser {}: WebSocket handshake failed: {}", s->peer, ec.message());
       return;
@@ -219,7 +251,7 @@ void WebServer::upgrade(const std::shared_ptr<Http>& h) {
     s->id = next_id_++;
     sessions_[s->id] = s;
     spdlog::info("browser {} connected ({}) ({} open)", s->id, s->peer, sessions_.size());
-    if (handlers_.greeting) enqueue(s, handlers_.greeting().dump(), false);
+    if (handlers_.greeting) enqueue(s, proto::frame(handlers_.greeting()), false);
     read(s);
   });
 }
@@ -234,15 +266,24 @@ void WebServer::read(const std::shared_ptr<Session>& s) {
     std::string text = beast::buffers_to_string(s->in.data());
     s->in.consume(s->in.size());
     // One message, one or more request lines (the TCP framing, for clients that reuse it).
+    int lines = 0;
     std::size_t start = 0;
-    while (start <= text.size()) {
+    while (start < text.size()) {
       std::size_t end = text.find('\n', start);
       if (end == std::string::npos) end = text.size();
       std::string line = text.substr(start, end - start);
-      if (!line.empty() && line.back() == '\r') line.pop_back();
-      if (!line.empty()) handlers_.on_line(s->id, line);
-      if (s->closed) return;
       start = end + 1;
+      if (!line.empty() && line.back() == '\r') line.pop_back();
+      if (line.empty()) continue;
+      if (++lines > kMaxLinesPerMessage) {
+        enqueue(s,
+                proto::frame(proto::errorObject("at most " + std::to_string(kMaxLinesPerMessage) +
+                                                " request lines per message: the rest is dropped")),
+                false);
+        break;
+      }
+      handlers_.on_line(s->id, line);
+      if (s->closed) return;
     }
     read(s);
   });
@@ -250,12 +291,21 @@ void WebServer::read(const std::shared_ptr<Session>& s) {
 
 void WebServer::send(ClientId browser, const nlohmann::json& object) {
   const auto it = sessions_.find(browser);
-  if (it != sessions_.end()) enqueue(it->second, object.dump(), false);
+  if (it != sessions_.end()) enqueue(it->second, proto::frame(object), false);
+}
+
+bool WebServer::anyWatching() const {
+  for (const auto& [id, s] : sessions_)
+    if (s->watching) return true;
+  return false;
 }
 
 void WebServer::broadcast(const std::string& line, bool droppable) {
-  for (auto& [id, s] : sessions_)
-    if (s->watching) enqueue(s, line, droppable);
+  // Copy: enqueue may close (and erase) a browser.
+  std::vector<std::shared_ptr<Session>> targets;
+  for (const auto& [id, s] : sessions_)
+    if (s->watching) targets.push_back(s);
+  for (const auto& s : targets) enqueue(s, line, droppable);
 }
 
 void WebServer::setWatching(ClientId browser, bool watching) {
@@ -265,7 +315,8 @@ void WebServer::setWatching(ClientId browser, bool watching) {
 
 void WebServer::enqueue(const std::shared_ptr<Session>& s, std::string text, bool droppable) {
   if (s->closed) return;
-  if (s->queue.size() >= limits_.queue_max) {
+  if (s->queue.size() >= limits_.queue_max ||
+      s->queued_bytes + text.size() > limits_.queue_max_bytes) {
     if (droppable) {
       ++s->dropped;
       ++counts_.dropped_lines;
@@ -275,6 +326,7 @@ void WebServer::enqueue(const std::shared_ptr<Session>& s, std::string text, boo
     close(s, "its queue is full (" + std::to_string(limits_.queue_max) + " messages)");
     return;
   }
+  s->queued_bytes += text.size();
   s->queue.push_back(std::move(text));
   if (!s->writing) {
     s->last_progress = Clock::now();  // the stall clock starts with the write
@@ -290,6 +342,7 @@ void WebServer::write(const std::shared_ptr<Session>& s) {
                       if (s->closed) return;
                       if (ec) return close(s, ec.message());
                       s->last_progress = Clock::now();
+                      s->queued_bytes -= s->queue.front().size();
                       s->queue.pop_front();
                       if (s->queue.empty())
                         s->writing = false;
@@ -298,7 +351,7 @@ void WebServer::write(const std::shared_ptr<Session>& s) {
                     });
 }
 
-void WebServer::close(const std::shared_ptr<Session>& s, const std::string& why) {
+void WebServer::close(std::shared_ptr<Session> s, const std::string& why) {
   if (s->closed) return;
   s->closed = true;
   boost::system::error_code ignored;

@@ -115,7 +115,7 @@ TEST_CASE("web port: the page, /metrics and /console.json over HTTP; bad request
   CHECK_THAT(settings, Contains("\"bar_hard_limit_mm\""));
   CHECK_THAT(get(port, "/etc/passwd"), Contains("HTTP/1.1 404"));
   CHECK_THAT(rawHttp(port,
-                     "POST /metrics HTTP/1.1\r\nHost: x\r\nContent-Length: 0\r\n"
+                     "POST /metrics HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Length: 0\r\n"
                      "Connection: close\r\n\r\n"),
              Contains("HTTP/1.1 405") && Contains("Allow: GET, HEAD"));
   // Not HTTP, a request far too large, a request never finished: each connection ends, the
@@ -126,6 +126,14 @@ TEST_CASE("web port: the page, /metrics and /console.json over HTTP; bad request
   CHECK(rawHttp(port, "GET / HTTP/1.1\r\nHost: x\r\n").find("200 OK") == std::string::npos);
   CHECK_THAT(get(port, "/metrics"), Contains("HTTP/1.1 200"));
   CHECK(f.daemon->client()->request({{"cmd", "status"}})["state"] == "idle");  // TCP unchanged
+  // A name that is not this cell's (a page that rebound its name to this address): refused;
+  // addresses and localhost are served.
+  CHECK_THAT(rawHttp(port, "GET /metrics HTTP/1.1\r\nHost: evil.example:" + std::to_string(port) +
+                               "\r\n\r\n"),
+             Contains("HTTP/1.1 421") && Contains("web_allowed_origins"));
+  CHECK_THAT(rawHttp(port, "GET / HTTP/1.1\r\nHost: localhost:" + std::to_string(port) +
+                               "\r\nConnection: close\r\n\r\n"),
+             Contains("HTTP/1.1 200"));
 }
 
 TEST_CASE("web port: the WebSocket carries the TCP protocol; actions need the token", "[web]") {
@@ -148,6 +156,12 @@ TEST_CASE("web port: the WebSocket carries the TCP protocol; actions need the to
   b.ws.write(asio::buffer(std::string("{\"cmd\":\"runs\"}\nnot json\n")));
   CHECK(b.read()["class"] == "RUNS");
   CHECK(b.read()["class"] == "ERROR");
+  // At most 16 request lines in one message: the rest is dropped with an ERROR that says so.
+  std::string many;
+  for (int i = 0; i < 40; ++i) many += "{\"cmd\":\"status\"}\n";
+  b.ws.write(asio::buffer(many));
+  for (int i = 0; i < 16; ++i) CHECK(b.read()["class"] == "STATUS");
+  CHECK_THAT(b.read()["message"].get<std::string>(), Contains("at most 16 request lines"));
   // Watching: the stream, as on TCP.
   b.send({{"cmd", "watch"}, {"enable", true}});
   CHECK(b.readClass("WATCH")["enable"] == true);
@@ -194,24 +208,30 @@ TEST_CASE("metrics: counters from the published objects, state and result as gau
                        {"n", 800},
                        {"validation_rms_mm", 0.04},
                        {"work_volume", {{"predicted_position_error_mm", {{"rms", 0.02}}}}}};
-  const std::string text = m.text(status, result, 1);
-  CHECK_THAT(text, Contains("robocal_run_state{state=\"measuring\"} 1\n") &&
-                       Contains("robocal_run_state{state=\"idle\"} 0\n") &&
-                       Contains("robocal_points_done 7\n") &&
-                       Contains("robocal_samples_total 1\n") &&
-                       Contains("robocal_bar_over_range_total 2\n") &&
-                       Contains("robocal_bar_deflection_mm -0.25\n") &&
-                       Contains("robocal_faults_total{kind=\"val_timeouts\"} 3\n") &&
-                       Contains("robocal_run_stops_total{state=\"paused\"} 1\n") &&
-                       Contains("robocal_events_total{event=\"recentre\"} 1\n") &&
-                       Contains("robocal_device_connected{device=\"bar\"} 0\n") &&
-                       Contains("robocal_clients{transport=\"web\"} 1\n") &&
-                       Contains("robocal_client_events_total{kind=\"refused\"} 1\n") &&
-                       Contains("robocal_fit_rms_mm 0.03\n") &&
-                       Contains("robocal_validation_rms_mm 0.04\n") &&
-                       Contains("robocal_work_volume_error_mm 0.02\n"));
+  daemon::Metrics::Clients clients;
+  clients.tcp = 2;
+  clients.web = 1;
+  clients.web_counts.refused = 4;
+  const std::string text = m.text(status, result, clients);
+  CHECK_THAT(text,
+             Contains("robocal_run_state{state=\"measuring\"} 1\n") &&
+                 Contains("robocal_run_state{state=\"idle\"} 0\n") &&
+                 Contains("robocal_points_done 7\n") && Contains("robocal_samples_total 1\n") &&
+                 Contains("robocal_bar_over_range_total 2\n") &&
+                 Contains("robocal_bar_deflection_mm -0.25\n") &&
+                 Contains("robocal_faults_total{kind=\"val_timeouts\"} 3\n") &&
+                 Contains("robocal_run_stops_total{state=\"paused\"} 1\n") &&
+                 Contains("robocal_events_total{event=\"recentre\"} 1\n") &&
+                 Contains("robocal_device_connected{device=\"bar\"} 0\n") &&
+                 Contains("robocal_clients{transport=\"web\"} 1\n") &&
+                 Contains("robocal_clients{transport=\"tcp\"} 2\n") &&
+                 Contains("robocal_client_events_total{transport=\"tcp\",kind=\"refused\"} 1\n") &&
+                 Contains("robocal_client_events_total{transport=\"web\",kind=\"refused\"} 4\n") &&
+                 Contains("robocal_fit_rms_mm 0.03\n") &&
+                 Contains("robocal_validation_rms_mm 0.04\n") &&
+                 Contains("robocal_work_volume_error_mm 0.02\n"));
   CHECK(text.find("shell\"}") == std::string::npos);  // "shell" of an event is not a fault
   // Before any fit: no fit gauges at all (not zeros, which would read as a perfect fit).
-  const std::string before = m.text(status, {{"available", false}}, 0);
+  const std::string before = m.text(status, {{"available", false}}, {});
   CHECK(before.find("robocal_fit_rms_mm") == std::string::npos);
 }

@@ -34,6 +34,11 @@ struct HubLimits {
   double request_timeout_s = 10.0;
 };
 
+// Opens, binds (reusing the address) and listens on `acceptor`: the TCP and web ports alike.
+// Throws boost::system::system_error (a port in use, an address not on this host).
+void bindAndListen(boost::asio::ip::tcp::acceptor& acceptor, const std::string& address,
+                   unsigned short port);
+
 class ClientHub {
  public:
   using ClientId = std::uint64_t;
@@ -62,7 +67,8 @@ class ClientHub {
   void read(const std::shared_ptr<Client>& c);
   void enqueue(const std::shared_ptr<Client>& c, std::string line, bool droppable);
   void write(const std::shared_ptr<Client>& c);
-  void close(const std::shared_ptr<Client>& c, const std::string& why);
+  // By value: the map's own pointer may be what is erased.
+  void close(std::shared_ptr<Client> c, const std::string& why);
   void checkStalls();
 
   boost::asio::io_context& io_;

@@ -3,6 +3,8 @@
 // from them with the current STATUS and RESULT. Pure: no I/O, no clock.
 #pragma once
 
+#include <robocal/daemon/web_server.hpp>
+
 #include <nlohmann/json.hpp>
 
 #include <map>
@@ -14,10 +16,14 @@ class Metrics {
  public:
   // Every object the daemon publishes to watchers (BAR, SAMPLE, STATE, EVENT, ...).
   void observe(const nlohmann::json& object);
-  // The exposition: `status` a STATUS object, `result` a RESULT object (or one with
-  // "available": false), `web_clients` the browsers connected.
+  struct Clients {
+    int tcp = 0, web = 0;  // connected now
+    WebCounts web_counts;  // browsers refused, closed as stuck, readings dropped
+  };
+  // The exposition: `status` a STATUS object (its client_counts are the TCP side's), `result` a
+  // RESULT object (or one with "available": false).
   std::string text(const nlohmann::json& status, const nlohmann::json& result,
-                   int web_clients) const;
+                   const Clients& clients) const;
 
  private:
   std::map<std::string, long> bar_lines_;    // BAR lines by kind

@@ -4,7 +4,7 @@
 //   GET /console.json  what the page needs besides the protocol (the bar's limits)
 //   GET /metrics       the Prometheus text format
 //   GET /ws            a WebSocket: the TCP protocol's requests and objects, one JSON object per
-//                      text message (a message may also hold several request lines)
+//                      text message (a message may also hold up to 16 request lines)
 // Everything is readable without the token; actions carry it in their JSON, as on TCP.
 // Bounded as the TCP side is: at most max_browsers WebSockets, a bounded queue each (BAR
 // readings dropped first), a browser whose queue does not move for stall_s is closed, a request
@@ -33,8 +33,11 @@ struct WebLimits {
   double stall_s = 5.0;
   double request_timeout_s = 10.0;
   // Origins besides the page's own (http://HOST:PORT as the browser reached it) whose pages may
-  // open the WebSocket, e.g. "http://cell7-console.plant.local:7688".
+  // open the WebSocket, e.g. "http://cell7-console.plant.local:7688". Their host names are also
+  // the names, besides IP addresses and localhost, a request's Host may carry (a page of another
+  // site that rebinds its name to this address is refused).
   std::vector<std::string> allowed_origins;
+  std::size_t queue_max_bytes = 8 * 1024 * 1024;  // per browser, besides queue_max messages
 };
 
 struct WebCounts {
@@ -66,7 +69,9 @@ class WebServer {
   unsigned short listen(const std::string& address, unsigned short port);
 
   void send(ClientId browser, const nlohmann::json& object);
-  void broadcast(const std::string& line, bool droppable);  // to every watching browser
+  // To every watching browser: `line` as proto::frame made it (the TCP bytes, newline included).
+  void broadcast(const std::string& line, bool droppable);
+  bool anyWatching() const;
   void setWatching(ClientId browser, bool watching);
   int browserCount() const { return static_cast<int>(sessions_.size()); }
   WebCounts counts() const { return counts_; }
@@ -81,8 +86,10 @@ class WebServer {
   void read(const std::shared_ptr<Session>& s);
   void enqueue(const std::shared_ptr<Session>& s, std::string text, bool droppable);
   void write(const std::shared_ptr<Session>& s);
-  void close(const std::shared_ptr<Session>& s, const std::string& why);
+  // By value: the map's own pointer may be what is erased.
+  void close(std::shared_ptr<Session> s, const std::string& why);
   void checkStalls();
+  bool hostAllowed(const std::string& host) const;
   bool originAllowed(const std::string& origin, const std::string& host) const;
 
   boost::asio::io_context& io_;
@@ -91,7 +98,8 @@ class WebServer {
   boost::asio::ip::tcp::acceptor acceptor_;
   boost::asio::steady_timer stall_timer_;
   std::map<ClientId, std::shared_ptr<Session>> sessions_;
-  int http_open_ = 0;  // plain HTTP connections being served
+  int http_open_ = 0;    // plain HTTP connections being served
+  int handshaking_ = 0;  // WebSockets accepted, handshake not yet done: they count as browsers
   ClientId next_id_ = kFirstId;
   WebCounts counts_;
 };
