@@ -1,5 +1,7 @@
 #include <robocal/daemon/metrics.hpp>
 
+#include <robocal/proto/protocol.hpp>
+
 #include <cmath>
 #include <cstdio>
 #include <utility>
@@ -74,10 +76,6 @@ double numberOr(const json& o, const char* key, double fallback) {
   return it != o.end() && it->is_number() ? it->get<double>() : fallback;
 }
 
-const char* kStates[] = {"idle",      "checking", "moving",      "awaiting_confirm",
-                         "measuring", "paused",   "interrupted", "solving",
-                         "done",      "aborted",  "error"};
-
 }  // namespace
 
 void Metrics::observe(const json& object) {
@@ -103,7 +101,11 @@ std::string Metrics::text(const json& status, const json& result, const Clients&
   Exposition e;
   const std::string state = status.value("state", "");
   e.family("robocal_run_state", "gauge", "1 for the run's current state, 0 for the others.");
-  for (const char* s : kStates) e.sample(state == s ? 1 : 0, "state", s);
+  // Every state the protocol spells (RunState, kIdle to kError), by its wire name.
+  for (int k = 0; k <= static_cast<int>(proto::RunState::kError); ++k) {
+    const std::string name = proto::runStateName(static_cast<proto::RunState>(k));
+    e.sample(state == name ? 1 : 0, "state", name);
+  }
   e.family("robocal_points_done", "gauge", "Data points measured in the current run.")
       .sample(numberOr(status, "points_done", 0));
   e.family("robocal_plan_points", "gauge", "Data points in the current run's plan.")
