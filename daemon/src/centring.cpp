@@ -28,29 +28,42 @@ void Centring::refit() {
   refined_at_ = samples_.size();
 }
 
-std::optional<JointsDeg> correction(const Model& model, const CellConfig& cell,
-                                    const ShellPlan& shell, const JointsDeg& q,
-                                    double deflection_mm, std::string& problem) {
+Eigen::Vector3d barDirection(const Model& model, const Connection& c, const JointsDeg& q) {
+  const Eigen::Vector3d ball = Kinematics(model).ballPosition(q, model.balls_mm[c.ball_index]);
+  return (ball - model.chucks_mm[c.chuck_index]).normalized();
+}
+
+double barLengthMm(const Model& model, const Connection& c, const JointsDeg& q) {
+  const Eigen::Vector3d ball = Kinematics(model).ballPosition(q, model.balls_mm[c.ball_index]);
+  return (ball - model.chucks_mm[c.chuck_index]).norm();
+}
+
+std::optional<JointsDeg> ballMove(const Model& model, const CellConfig& cell,
+                                  const ShellPlan& shell, const JointsDeg& q,
+                                  const Eigen::Vector3d& move_mm, std::string& problem) {
   const Connection& c = shell.connection;
   const Kinematics kin(model);
-  const Eigen::Vector3d ball = kin.ballPosition(q, model.balls_mm[c.ball_index]);
-  const Eigen::Vector3d u = (ball - model.chucks_mm[c.chuck_index]).normalized();
   const Eigen::Matrix<double, 3, 6> jac =
       kin.jointJacobian(q, model.balls_mm[c.ball_index]).topRows<3>();
-  const Eigen::Vector3d move = -deflection_mm * u;
   const Eigen::Matrix<double, 6, 1> dq =
-      jac.transpose() * (jac * jac.transpose()).partialPivLu().solve(move);
+      jac.transpose() * (jac * jac.transpose()).partialPivLu().solve(move_mm);
   const JointsDeg target = q + dq / kRadPerDeg;
   constexpr double kMaxTurnDegPerMm = 2.0;
   const double max_turn_deg = (dq / kRadPerDeg).cwiseAbs().maxCoeff();
-  if (!target.allFinite() ||
-      max_turn_deg > kMaxTurnDegPerMm * std::max(1.0, std::abs(deflection_mm)))
+  if (!target.allFinite() || max_turn_deg > kMaxTurnDegPerMm * std::max(1.0, move_mm.norm()))
     problem = "it would turn a joint by " + std::to_string(max_turn_deg) + " deg";
   else
     problem = ShellPlanner(model, cell)
                   .poseProblem(c, shell.radius_mm, target, std::numeric_limits<double>::infinity());
   if (!problem.empty()) return std::nullopt;
   return target;
+}
+
+std::optional<JointsDeg> correction(const Model& model, const CellConfig& cell,
+                                    const ShellPlan& shell, const JointsDeg& q,
+                                    double deflection_mm, std::string& problem) {
+  return ballMove(model, cell, shell, q, -deflection_mm * barDirection(model, shell.connection, q),
+                  problem);
 }
 
 }  // namespace robocal::daemon

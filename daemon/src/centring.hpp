@@ -8,7 +8,10 @@
 #include <robocal/planner/cell.hpp>
 #include <robocal/planner/plan.hpp>
 
+#include <Eigen/Core>
+
 #include <optional>
+#include <string>
 #include <vector>
 
 namespace robocal::daemon {
@@ -39,6 +42,16 @@ class Centring {
   std::optional<Model> refined_;
   std::size_t refined_at_ = 0;  // samples in the last refit
 };
+
+// The unit vector from the connection's chuck to its ball at joints `q`, and that distance (mm).
+Eigen::Vector3d barDirection(const Model& model, const Connection& c, const JointsDeg& q);
+double barLengthMm(const Model& model, const Connection& c, const JointsDeg& q);
+
+// The joints that move the shell's ball by `move_mm` (the least joint motion that does), checked
+// as correction() says; nullopt with the reason in `problem`.
+std::optional<JointsDeg> ballMove(const Model& model, const CellConfig& cell,
+                                  const ShellPlan& shell, const JointsDeg& q,
+                                  const Eigen::Vector3d& move_mm, std::string& problem);
 
 // The corrective move toward zero deflection: the ball moved along the bar by -deflection_mm.
 // Checked like a planned pose before anything moves (limits, singularities, bar-tool angle,

@@ -180,10 +180,12 @@ struct RunController::Impl {
       ctx.ensureDevices();
       ShellRunner(ctx, fits, *dir, plan).run();
       ctx.reportLinkFaults(*dir);
-      recordRunState(*dir, {{"status", "done"}});
-      dir->logEvent({{"event", "done"}});
+      // Done on disk only once the last fit is written: a kill during it leaves the run
+      // interrupted, and its resume fits the set again (ShellRunner::run).
       ctx.setState(RunState::kSolving, "waiting for the last fit");
       fits.wait();
+      recordRunState(*dir, {{"status", "done"}});
+      dir->logEvent({{"event", "done"}});
       ctx.setState(RunState::kDone, "run " + dir->id() + " complete");
     } catch (const StopRun& stop) {
       stopped(dir, stop);
@@ -310,6 +312,31 @@ std::string RunController::confirm(std::optional<int> shell) {
   });
 }
 
+namespace {
+// Why the bar looks seated on the ball ("" when it reads as it did off the robot): a reading
+// more than `threshold_mm` from the free bar's at the prompt, or a status line in its place.
+std::string barSeatedProblem(const RunData& d, double threshold_mm) {
+  if (!d.latest_bar || !d.free_bar_mm) return {};  // nothing to compare with
+  char buf[240];
+  if (d.latest_bar->kind != proto::BarKind::kReading) {
+    std::snprintf(buf, sizeof buf,
+                  "nudge refused: the ball-bar reports %s, as a seated bar pushed past its "
+                  "range would: take the bar off the ball before nudging",
+                  proto::barKindName(d.latest_bar->kind));
+    return buf;
+  }
+  if (!d.latest_bar->deflection_mm) return {};
+  const double change_mm = *d.latest_bar->deflection_mm - *d.free_bar_mm;
+  if (std::abs(change_mm) <= threshold_mm) return {};
+  std::snprintf(buf, sizeof buf,
+                "nudge refused: the ball-bar reads %+.3f mm, %+.3f mm from its reading off the "
+                "robot, so it looks seated: a nudge would move it at full speed. Confirm if the "
+                "bar is seated; take it off the ball to nudge",
+                *d.latest_bar->deflection_mm, change_mm);
+  return buf;
+}
+}  // namespace
+
 std::string RunController::nudge(std::optional<int> shell, double mm) {
   return impl_->shared.with([&](RunData& d) -> std::string {
     if (!d.prompt || d.prompt->action != proto::PromptAction::kConnect)
@@ -320,6 +347,11 @@ std::string RunController::nudge(std::optional<int> shell, double mm) {
     if (std::abs(d.nudged_mm + mm) > 10.0)
       return "nudges for this connection would pass 10 mm in all: check the set-up";
     if (d.nudge_mm) return "a nudge is still moving";
+    // A nudge moves the ball at the controller's speed and is not stopped short: with the bar
+    // seated it would stretch or crush it. A reading that has left the free bar's says seated.
+    if (const std::string seated = barSeatedProblem(d, impl_->config.detached_change_mm);
+        !seated.empty())
+      return seated;
     d.nudge_mm = mm;
     d.nudged_mm += mm;
     return {};

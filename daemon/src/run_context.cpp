@@ -115,6 +115,11 @@ void RunContext::reportLinkFaults(RunDir& dir) {
 
 void RunContext::onBarLine(const drivers::BarReading& r) {
   last_reading_ = r;
+  if (r.kind == drivers::BarLineKind::kReading) {
+    recent_readings_mm_.push_back(r.value_mm);
+    if (recent_readings_mm_.size() > kReferenceReadings) recent_readings_mm_.pop_front();
+  }
+  if (detached_reference_mm_) detached_.add(r, *detached_reference_mm_);
   if (collecting_ && r.kind == drivers::BarLineKind::kReading) window_.push_back(r.value_mm);
   if (steady_ && r.kind == drivers::BarLineKind::kReading)
     steady_->add(std::chrono::duration<double>(r.time - dwell_start_).count(), r.value_mm);
@@ -127,6 +132,13 @@ void RunContext::onBarLine(const drivers::BarReading& r) {
   publish(proto::toJson(b), true);
 }
 
+std::optional<double> RunContext::recentReadingMm() const {
+  if (recent_readings_mm_.empty()) return std::nullopt;
+  std::vector<double> v(recent_readings_mm_.begin(), recent_readings_mm_.end());
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
 void RunContext::setAttachment(const BarAttachment& a) {
   store.setBarAttachment(a);
   shared.with([&](RunData& d) { d.attachment = a; });
@@ -137,6 +149,10 @@ BarAttachment RunContext::attachment() const {
 }
 
 std::optional<double> RunContext::watchBar() {
+  return watchBar(config.bar_hard_limit_mm);
+}
+
+std::optional<double> RunContext::watchBar(double hard_limit_mm) {
   if (!io.barConnected()) throw StopRun{StopRun::kFault, "ball-bar reader disconnected"};
   if (io.barStale())
     throw StopRun{StopRun::kFault, "no ball-bar reading for " +
@@ -146,30 +162,36 @@ std::optional<double> RunContext::watchBar() {
     throw StopRun{StopRun::kFault,
                   std::string("ball-bar reports ") + drivers::barLineKindName(last_reading_->kind)};
   const double d = last_reading_->value_mm;
-  if (std::abs(d) > config.bar_hard_limit_mm)
+  if (std::abs(d) > hard_limit_mm)
     throw StopRun{StopRun::kFault, "bar deflection " + std::to_string(d) +
-                                       " mm past the hard limit " +
-                                       std::to_string(config.bar_hard_limit_mm) + " mm"};
+                                       " mm past the hard limit " + std::to_string(hard_limit_mm) +
+                                       " mm"};
   if (std::abs(d) > config.bar_soft_limit_mm) return d;
   return std::nullopt;
 }
 
-void RunContext::watchDetached(const std::optional<double>& reading_at_start) {
-  if (!reading_at_start || !last_reading_) return;
-  const bool over_range = last_reading_->kind == drivers::BarLineKind::kOverRange;
-  if (last_reading_->kind != drivers::BarLineKind::kReading && !over_range) return;
-  const double change_mm = over_range ? std::numeric_limits<double>::infinity()
-                                      : last_reading_->value_mm - *reading_at_start;
-  if (std::abs(change_mm) <= config.detached_change_mm) return;
+void RunContext::DetachedChange::add(const drivers::BarReading& r, double reference_mm) {
+  if (r.kind == drivers::BarLineKind::kOverRange) {
+    over_range = true;
+    return;
+  }
+  if (r.kind != drivers::BarLineKind::kReading) return;
+  change_mm = r.value_mm - reference_mm;
+  readings_past = std::abs(change_mm) > threshold_mm ? readings_past + 1 : 0;
+}
+
+void RunContext::watchDetached() {
+  if (!detached_reference_mm_ || (!detached_.over_range && detached_.readings_past < 2)) return;
   BarAttachment doubt = attachment();
   doubt.maybe_attached = true;
   setAttachment(doubt);  // the next start or resume asks to detach it first
   char buf[64];
-  std::snprintf(buf, sizeof buf, over_range ? "from %+.3f mm to over range" : "by %+.3f mm",
-                over_range ? *reading_at_start : change_mm);
-  throw StopRun{StopRun::kFault, std::string("the ball-bar reading changed ") + buf +
-                                     " while the robot moved with the bar believed detached: "
-                                     "check that the bar is off the robot"};
+  std::snprintf(buf, sizeof buf,
+                detached_.over_range ? "from %+.3f mm to over range" : "by %+.3f mm",
+                detached_.over_range ? *detached_reference_mm_ : detached_.change_mm);
+  throw DetachedBarMoved{{StopRun::kFault, std::string("the ball-bar reading changed ") + buf +
+                                               " while the robot moved with the bar believed "
+                                               "detached: check that the bar is off the robot"}};
 }
 
 // ------------------------------------------------------------------------ moves and time
@@ -215,19 +237,30 @@ bool RunContext::dwell(Clock::time_point motion_end) {
 }
 
 JointsDeg RunContext::move(const JointsDeg& target, bool bar_attached) {
+  return move(target, bar_attached, config.bar_hard_limit_mm);
+}
+
+JointsDeg RunContext::move(const JointsDeg& target, bool bar_attached, double hard_limit_mm) {
   checkpoint();
-  if (bar_attached) watchBar();  // nothing starts with the bar already in fault
-  std::optional<double> detached_reading;
-  if (!bar_attached && last_reading_ && last_reading_->kind == drivers::BarLineKind::kReading)
-    detached_reading = last_reading_->value_mm;
+  if (bar_attached) watchBar(hard_limit_mm);  // nothing starts with the bar already in fault
+  // Believed detached, the reference is the median of the last readings, and a change counts
+  // when two readings in a row show it: one glitch of a free bar is not an attached bar.
+  struct Reference {
+    std::optional<double>& slot;
+    ~Reference() { slot.reset(); }
+  } const reference{detached_reference_mm_};
+  if (!bar_attached && last_reading_ && last_reading_->kind == drivers::BarLineKind::kReading) {
+    detached_reference_mm_ = recentReadingMm();
+    detached_ = DetachedChange{config.detached_change_mm};
+  }
   return io
       .move(target,
             [&] {
               checkpoint();
               if (bar_attached)
-                watchBar();
+                watchBar(hard_limit_mm);
               else
-                watchDetached(detached_reading);
+                watchDetached();
               return false;
             })
       .joints_deg;
@@ -281,11 +314,16 @@ RunContext::Measurement RunContext::measureHere(double window_s) {
 void RunContext::waitConfirm(RunDir& dir, const proto::Prompt& prompt,
                              const std::function<void(double)>& on_nudge) {
   const int shell = prompt.shell;
+  // At a connect prompt the bar is off the robot: its reading now is the free bar's, which a
+  // nudge request is compared with (RunController::nudge).
+  const std::optional<double> free_mm =
+      prompt.action == proto::PromptAction::kConnect ? recentReadingMm() : std::nullopt;
   const int seen = shared.with([&](RunData& d) {
     d.prompt = prompt;
     d.prompt_shell = shell;
     d.nudge_mm.reset();
     d.nudged_mm = 0;
+    d.free_bar_mm = free_mm;
     return d.confirms;
   });
   setState(proto::RunState::kAwaitingConfirm, prompt.message);

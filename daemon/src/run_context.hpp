@@ -14,6 +14,7 @@
 #include <robocal/planner/plan.hpp>
 
 #include <chrono>
+#include <deque>
 #include <map>
 #include <optional>
 #include <string>
@@ -26,6 +27,9 @@ struct StopRun {
   enum Kind { kPause, kFault, kAbort } kind;
   std::string reason;
 };
+// A fault of its own kind: the bar's reading moved with the robot while the bar was believed
+// detached. A nudge at a connect prompt catches it (the operator seated the bar early).
+struct DetachedBarMoved : StopRun {};
 
 class RunContext {
  public:
@@ -70,10 +74,17 @@ class RunContext {
   void setBarOffset(double length_mm) { bar_offset_mm_ = length_mm; }
   double barOffset() const { return bar_offset_mm_; }
   const std::optional<drivers::BarReading>& lastReading() const { return last_reading_; }
-  void forgetReading() { last_reading_.reset(); }
+  // The median of the last few readings (nullopt before any): steadier than one reading.
+  std::optional<double> recentReadingMm() const;
+  void forgetReading() {
+    last_reading_.reset();
+    recent_readings_mm_.clear();
+  }
   // Throws StopRun (fault) when the bar is out of range, silent, or past the hard limit; returns
   // the deflection when it is past the soft limit.
   std::optional<double> watchBar();
+  // The same against another hard limit (a connect reading re-centred from past the run's own).
+  std::optional<double> watchBar(double hard_limit_mm);
 
   // ---- moves and time
   // Pumps I/O (bar lines arrive) for a while / until a deadline, checking stop requests, and the
@@ -87,6 +98,8 @@ class RunContext {
   // A joint move watched for stop requests, controller errors and the bar: with the bar attached
   // its limits; believed detached, a reading that changes (the bar is still attached after all).
   JointsDeg move(const JointsDeg& target, bool bar_attached);
+  // The same, the bar attached and watched against `hard_limit_mm`.
+  JointsDeg move(const JointsDeg& target, bool bar_attached, double hard_limit_mm);
   // A move with the bar attached that stops where the bar passes its soft limit.
   struct Moved {
     JointsDeg joints_deg;
@@ -116,11 +129,26 @@ class RunContext {
 
  private:
   void onBarLine(const drivers::BarReading& r);
-  void watchDetached(const std::optional<double>& reading_at_start);
+  // Believed detached: stops the move (StopRun) once the bar's readings have left the reference
+  // taken before it (the bar is attached after all).
+  void watchDetached();
   std::string stopReason(const std::string& fallback) const;
 
   const std::optional<CellConfig>& cell_;
   std::optional<drivers::BarReading> last_reading_;
+  static constexpr std::size_t kReferenceReadings = 5;
+  std::deque<double> recent_readings_mm_;  // the last readings, for a move's detached reference
+  // While a move runs with the bar believed detached: how far the readings have left the
+  // reference, and how many readings in a row were past the threshold.
+  struct DetachedChange {
+    double threshold_mm = 0;
+    double change_mm = 0;
+    int readings_past = 0;
+    bool over_range = false;
+    void add(const drivers::BarReading& r, double reference_mm);
+  };
+  std::optional<double> detached_reference_mm_;
+  DetachedChange detached_;
   std::vector<double> window_;  // readings collected while averaging
   bool collecting_ = false;
   SteadyWindow* steady_ = nullptr;  // fed the readings during an adaptive dwell

@@ -45,9 +45,10 @@ struct RunData {
   // The operator.
   std::optional<proto::Prompt> prompt;  // the pending PROMPT
   int prompt_shell = 0;
-  int confirms = 0;                // counts confirm commands; the run waits for a change
-  std::optional<double> nudge_mm;  // requested, not yet done
-  double nudged_mm = 0;            // done for the pending prompt
+  int confirms = 0;                   // counts confirm commands; the run waits for a change
+  std::optional<double> nudge_mm;     // requested, not yet done
+  double nudged_mm = 0;               // done for the pending prompt
+  std::optional<double> free_bar_mm;  // the bar's reading off the robot, at the connect prompt
   // Progress.
   int shell_number = 0, shells_total = 0, points_done = 0, points_total = 0;
   double eta_s = 0;

@@ -3,6 +3,8 @@
 #include <robocal/formats/error.hpp>
 #include <robocal/formats/samples_csv.hpp>
 
+#include <spdlog/spdlog.h>
+
 #include <fcntl.h>
 #include <unistd.h>
 #include <algorithm>
@@ -58,20 +60,29 @@ void RunDir::appendSample(const Sample& s, double bar_spread_mm) {
 
 std::vector<Sample> RunDir::loadSamples() {
   const std::string path = file(kSamplesFile);
-  std::string text = readTextFile(path);
-  if (!text.empty() && text.back() != '\n') {
-    const size_t keep = text.rfind('\n') + 1;  // npos + 1 == 0: nothing whole
-    logEvent({{"event", "torn_row_removed"}, {"bytes", text.size() - keep}});
-    fs::resize_file(path, keep);
-    text.resize(keep);
+  if (const std::size_t cut = cutTornLastLine(path)) {
+    spdlog::warn("{}: a row torn by a crash ({} bytes) removed", path, cut);
+    logEvent({{"event", "torn_row_removed"}, {"file", kSamplesFile}, {"bytes", cut}});
   }
-  return parseSamples(text, path);
+  return parseSamples(readTextFile(path), path);
 }
 
 void RunDir::logEvent(nlohmann::json event) {
   nlohmann::json line = {{"time", isoNow()}};
   line.update(event);
-  appendTextFileDurably(file(kEventsFile),
+  const std::string path = file(kEventsFile);
+  // A line torn by a crash is cut before the next is appended, or the two would be glued into
+  // one that parses as neither.
+  if (const std::size_t cut = cutTornLastLine(path)) {
+    spdlog::warn("{}: a line torn by a crash ({} bytes) removed", path, cut);
+    appendTextFileDurably(path, nlohmann::json{{"time", isoNow()},
+                                               {"event", "torn_row_removed"},
+                                               {"file", kEventsFile},
+                                               {"bytes", cut}}
+                                        .dump() +
+                                    "\n");
+  }
+  appendTextFileDurably(path,
                         line.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
 }
 

@@ -3,15 +3,23 @@
 #include <robocal/daemon/connection_check.hpp>
 #include <robocal/planner/check.hpp>
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 
 namespace robocal::daemon {
 namespace {
 
 using json = nlohmann::json;
 using Clock = std::chrono::steady_clock;
+
+// A connect reading is first checked for a reading at all (over range, silent: a fault), not for
+// its size; re-centring from it may go this much past where it started before it stops.
+constexpr double kNoLimitMm = std::numeric_limits<double>::infinity();
+constexpr double kConnectSlackMm = 0.1;
 
 // A data point of a shell, as the samples file identifies it.
 std::tuple<int, double, double> pointKey(int shell, double lat_deg, double lon_deg) {
@@ -67,6 +75,7 @@ ShellRunner::ShellRunner(RunContext& ctx, FitJob& fits, RunDir& dir, const Plan&
       plan_(plan),
       cell_(ctx.cellFor(plan)),
       samples_(dir.loadSamples()),
+      shell_watch_(ctx.config.bar_soft_limit_mm),
       centring_(ctx.nominal, cell_, ctx.config.centering, samples_) {
   for (const Sample& s : samples_) done_.insert(pointKey(s.shell, s.lat_deg, s.lon_deg));
   for (const auto& sh : plan_.shells)
@@ -119,7 +128,11 @@ void ShellRunner::run() {
   for (std::size_t si = 0; si < plan_.shells.size(); ++si) {
     const ShellPlan& shell = plan_.shells[si];
     const int left = pointsLeft(shell);
-    if (left == 0) continue;
+    if (left == 0) {
+      // Measured in an earlier session: its set's fit may have been cut short by a kill.
+      completeSet(si, true);
+      continue;
+    }
     int points = 0;
     for (const auto& st : shell.steps) points += st.kind == StepKind::kPoint;
     ctx_.shared.with([&](RunData& d) {
@@ -132,8 +145,7 @@ void ShellRunner::run() {
   }
   // The run ends with the bar off the robot: the next run must not move with it attached.
   if (ctx_.barMaybeAttached())
-    ctx_.waitDetach(dir_, 0,
-                    "The run is complete: detach the ball-bar from the robot, then confirm.");
+    detach(0, "The run is complete: detach the ball-bar from the robot, then confirm.");
 }
 
 JointsDeg ShellRunner::corrected(const ShellPlan& shell, const JointsDeg& q,
@@ -146,13 +158,101 @@ JointsDeg ShellRunner::corrected(const ShellPlan& shell, const JointsDeg& q,
                                      " refused: " + problem};
 }
 
+void ShellRunner::detach(int shell_number, const std::string& message) {
+  const BarAttachment was = ctx_.attachment();
+  ctx_.waitDetach(dir_, shell_number, message);
+  if (was.ball < 1 || was.chuck < 1) return;  // no line to probe along: an unknown connection
+  // Away from the chuck by twice the threshold (an attached bar shows it, a free one does not),
+  // and never more than half the hard limit: an attached bar stays well inside its range.
+  const double probe_mm =
+      std::min(2 * ctx_.config.detached_change_mm, 0.5 * ctx_.config.bar_hard_limit_mm);
+  ShellPlan along;
+  along.shell = shell_number;
+  along.connection = {was.ball - 1, was.chuck - 1};
+  along.extension_mm = was.extension_mm;
+  const JointsDeg q = ctx_.io.where();
+  std::string problem;
+  const auto away = correction(centring_.model(), cell_, along, q, -probe_mm, problem);
+  if (!away) {
+    ctx_.event(dir_, {{"event", "detach_probe"}, {"shell", shell_number}, {"skipped", problem}});
+    return;
+  }
+  const std::optional<double> before_mm = ctx_.recentReadingMm();
+  bool followed = false;  // the move's own watch saw the bar follow it
+  try {
+    ctx_.move(*away, false);
+  } catch (const DetachedBarMoved&) {
+    followed = true;
+  }
+  ctx_.forgetReading();
+  ctx_.spin(std::max(0.3, 3 * ctx_.config.bar_window_s), false);
+  const auto& last = ctx_.lastReading();
+  const std::optional<double> after_mm = ctx_.recentReadingMm();
+  const bool over_range = last && last->kind == drivers::BarLineKind::kOverRange;
+  const double change_mm = before_mm && after_mm ? *after_mm - *before_mm : 0;
+  ctx_.event(dir_, {{"event", "detach_probe"},
+                    {"shell", shell_number},
+                    {"moved_mm", probe_mm},
+                    {"reading_change_mm", change_mm},
+                    {"over_range", over_range}});
+  if (!followed && !over_range && std::abs(change_mm) <= ctx_.config.detached_change_mm) return;
+  BarAttachment doubt = was;
+  doubt.maybe_attached = true;
+  ctx_.setAttachment(doubt);  // the resume asks to detach it again
+  char buf[160];
+  std::snprintf(buf, sizeof buf, over_range ? "went over range" : "changed by %+.3f mm", change_mm);
+  throw StopRun{StopRun::kFault,
+                "the ball-bar reading " + std::string(buf) + " when the ball moved " +
+                    std::to_string(probe_mm).substr(0, 4) + " mm away from chuck " +
+                    std::to_string(was.chuck) +
+                    " after the detach: the bar is still on the robot. Take it off ball " +
+                    std::to_string(was.ball) + ", then resume (the detach is asked again)"};
+}
+
+JointsDeg ShellRunner::nudge(const ShellPlan& shell, JointsDeg q, double mm) {
+  // The bar should not be attached yet: the ball creeps along the line to the chuck in steps of
+  // the detached threshold, and stops at the first step the bar follows (it was seated after
+  // all: a whole nudge at the controller's speed would stretch or crush it).
+  const double threshold_mm = ctx_.config.detached_change_mm;
+  const std::optional<double> free_mm = ctx_.recentReadingMm();
+  const int steps = std::max(1, static_cast<int>(std::ceil(std::abs(mm) / threshold_mm)));
+  for (int k = 1; k <= steps; ++k) {
+    bool followed = false;  // the move's own watch saw the bar follow
+    try {
+      q = ctx_.move(corrected(shell, q, -mm / steps), false);
+    } catch (const DetachedBarMoved&) {
+      followed = true;
+      q = ctx_.io.where();
+    }
+    ctx_.forgetReading();
+    ctx_.spin(std::max(0.1, ctx_.config.bar_window_s), false);
+    const auto& last = ctx_.lastReading();
+    const std::optional<double> now_mm = ctx_.recentReadingMm();
+    const bool over_range = last && last->kind == drivers::BarLineKind::kOverRange;
+    const double change_mm = free_mm && now_mm ? *now_mm - *free_mm : 0;
+    if (!followed && !over_range && std::abs(change_mm) <= threshold_mm) continue;
+    const double moved_mm = mm * k / steps;
+    ctx_.event(dir_, {{"event", "nudge_stopped"},
+                      {"shell", shell.shell},
+                      {"mm", mm},
+                      {"moved_mm", moved_mm},
+                      {"reading_change_mm", change_mm},
+                      {"over_range", over_range},
+                      {"reason",
+                       "the bar follows the ball: it is seated. Confirm if it is "
+                       "seated where it should be; take it off the ball to nudge"}});
+    break;
+  }
+  return q;
+}
+
 JointsDeg ShellRunner::connect(const ShellPlan& shell) {
   const Connection& c = shell.connection;
   const std::string conn = connectionName(c);
   // A bar left attached (by the last shell, an earlier run, a pause or a crash) is detached
   // before anything moves.
   if (ctx_.barMaybeAttached())
-    ctx_.waitDetach(dir_, shell.shell, "Detach the ball-bar from the robot, then confirm.");
+    detach(shell.shell, "Detach the ball-bar from the robot, then confirm.");
   ctx_.setState(proto::RunState::kMoving,
                 "to shell " + std::to_string(shell.shell) + "'s connect pose");
   JointsDeg q = ctx_.move(shell.connect.joints_deg, false);
@@ -165,17 +265,22 @@ JointsDeg ShellRunner::connect(const ShellPlan& shell) {
   ctx_.waitConfirm(dir_,
                    proto::Prompt{proto::PromptAction::kConnect, shell.shell, c.ball_index + 1,
                                  c.chuck_index + 1, shell.extension_mm, connectMessage(shell)},
-                   [&](double mm) {
-                     // The bar is not attached yet: the ball moves along the line to the chuck.
-                     q = ctx_.move(corrected(shell, q, -mm), false);
-                   });
+                   [&](double mm) { q = nudge(shell, q, mm); });
   ctx_.setBarOffset(cell_.bar.nominal_length_mm + shell.extension_mm);
   // The bar must read, and read near zero, before anything moves with it attached.
   ctx_.forgetReading();
   ctx_.spin(std::min(1.0, ctx_.config.drivers.bar.stale_after_s), false);
   if (!ctx_.lastReading())
     throw StopRun{StopRun::kFault, "no ball-bar reading after connecting " + conn};
-  ctx_.watchBar();
+  // A connect reading past the hard limit but inside the bar's range is the model's error at the
+  // connect pose (a robot 2 mm off its model): the ball is moved back along the bar, watched
+  // against the reading it starts from, instead of pausing a run that a resume would only bring
+  // back here. Over range, or silent, stops as always.
+  ctx_.watchBar(kNoLimitMm);
+  const double connect_limit_mm =
+      std::max(ctx_.config.bar_hard_limit_mm,
+               std::min(cell_.bar.max_deflection_mm,
+                        std::abs(ctx_.lastReading()->value_mm) + kConnectSlackMm));
   dir_.logEvent({{"event", "connected"},
                  {"shell", shell.shell},
                  {"connection", conn},
@@ -187,13 +292,14 @@ JointsDeg ShellRunner::connect(const ShellPlan& shell) {
     const double d = ctx_.lastReading()->value_mm;
     ctx_.event(dir_,
                {{"event", "recentre"}, {"shell", shell.shell}, {"step", -1}, {"deflection_mm", d}});
-    q = ctx_.move(corrected(shell, q, d), true);
+    q = ctx_.move(corrected(shell, q, d), true, connect_limit_mm);
     ctx_.forgetReading();
     ctx_.spin(0.2, false);
     if (!ctx_.lastReading())
       throw StopRun{StopRun::kFault, "no ball-bar reading after re-centring"};
-    ctx_.watchBar();
+    ctx_.watchBar(connect_limit_mm);
   }
+  ctx_.watchBar();  // from here on the run's own limits
   verifyConnection(shell, q);
   if (centring_.enabled()) {
     centring_.add(shellSample(shell, ctx_.measureHere()));
@@ -213,20 +319,52 @@ void ShellRunner::verifyConnection(const ShellPlan& shell, JointsDeg& q) {
     return ctx_.measureHere(std::max(config.bar_window_s, 0.5));
   };
   const JointsDeg start = q;
+  // Every step goes from a commanded pose to a commanded pose, and the model predicts the change
+  // between them: the joints WHERE reports are rounded (0.01 deg is 0.05 mm at the ball), and a
+  // step planned from them moved the ball by that much more than predicted.
+  JointsDeg commanded = q;
+  ctx_.move(commanded, true);
   double before_mm = settledMeasurement().deflection_mm;
-  // Toward zero first: the bar stays inside its soft limit all the way.
-  const double sign = before_mm > 0 ? -1.0 : 1.0;
+  const Model& model = centring_.model();
+  const Connection& c = shell.connection;
   std::vector<ProbeStep> steps;
   json record = json::array();
-  for (const double commanded_mm : {sign * step_mm, -2.0 * sign * step_mm}) {
-    q = ctx_.move(corrected(shell, q, -commanded_mm), true);
+  std::string problem;  // the first step that fails ends the check: a wrong bar moves no more
+  const auto probe = [&](const Eigen::Vector3d& move_mm, double along_mm, double across_mm) {
+    if (!problem.empty()) return;
+    std::string refused;
+    const auto target = ballMove(model, cell_, shell, commanded, move_mm, refused);
+    if (!target)
+      throw StopRun{StopRun::kFault, "connection check on shell " + std::to_string(shell.shell) +
+                                         ": its step is refused: " + refused};
+    const double predicted_mm =
+        barLengthMm(model, c, *target) - barLengthMm(model, c, commanded);
+    q = ctx_.move(*target, true);
+    commanded = *target;
     const double after_mm = settledMeasurement().deflection_mm;
-    steps.push_back({commanded_mm, after_mm - before_mm});
-    record.push_back({{"commanded_mm", commanded_mm}, {"reading_change_mm", after_mm - before_mm}});
+    steps.push_back({along_mm, after_mm - before_mm, across_mm, predicted_mm});
+    record.push_back({{"commanded_mm", along_mm},
+                      {"across_mm", across_mm},
+                      {"predicted_mm", predicted_mm},
+                      {"reading_change_mm", after_mm - before_mm}});
     before_mm = after_mm;
+    problem = connectionCheckProblem(steps);
+  };
+  // Along the bar, toward zero first: the bar stays inside its soft limit all the way.
+  const double sign = before_mm > 0 ? -1.0 : 1.0;
+  for (const double along_mm : {sign * step_mm, -2.0 * sign * step_mm})
+    probe(along_mm * barDirection(model, c, commanded), along_mm, 0);
+  // Across it, two ways at right angles, each out and back: a bar on another ball turns.
+  const Eigen::Vector3d u = barDirection(model, c, commanded);
+  Eigen::Vector3d w1 = u.cross(Eigen::Vector3d::UnitZ());
+  if (w1.norm() < 0.3) w1 = u.cross(Eigen::Vector3d::UnitX());
+  w1.normalize();
+  const Eigen::Vector3d w2 = u.cross(w1).normalized();
+  for (const Eigen::Vector3d& w : {w1, w2}) {
+    probe(step_mm * w, 0, step_mm);
+    probe(-step_mm * w, 0, -step_mm);
   }
   q = ctx_.move(start, true);
-  const std::string problem = connectionCheckProblem(steps);
   ctx_.event(dir_, {{"event", "connection_check"},
                     {"shell", shell.shell},
                     {"connection", connectionName(shell.connection)},
@@ -364,7 +502,7 @@ JointsDeg ShellRunner::recordPoint(const ShellPlan& planned, const PlanStep& ste
   return m.joints_deg;
 }
 
-void ShellRunner::completeSet(std::size_t shell_index) {
+void ShellRunner::completeSet(std::size_t shell_index, bool only_unfitted) {
   const double extension_mm = plan_.shells[shell_index].extension_mm;
   // A shell set is complete when no later shell has the same extension.
   for (std::size_t k = shell_index + 1; k < plan_.shells.size(); ++k)
@@ -377,8 +515,15 @@ void ShellRunner::completeSet(std::size_t shell_index) {
     if (sh.extension_mm == extension_mm) break;
   }
   const int set_index = static_cast<int>(seen.size());
-  ctx_.event(dir_, {{"event", "set_complete"}, {"set", set_index}, {"extension_mm", extension_mm}});
-  if (plan_.purpose == PlanPurpose::kCheck)
+  const bool check = plan_.purpose == PlanPurpose::kCheck;
+  const std::string outcome_file =
+      check ? "check.json" : "result-set" + std::to_string(set_index) + ".json";
+  if (only_unfitted && std::filesystem::exists(dir_.file(outcome_file))) return;
+  ctx_.event(dir_, {{"event", "set_complete"},
+                    {"set", set_index},
+                    {"extension_mm", extension_mm},
+                    {"again", only_unfitted}});
+  if (check)
     fits_.launchCheck(dir_, samples_);  // a verdict on the active model, not a new fit
   else
     fits_.launch(dir_, samples_, extension_mm, set_index);

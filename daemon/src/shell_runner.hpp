@@ -34,6 +34,14 @@ class ShellRunner {
   double plannedPointSeconds(const ShellPlan& shell) const;
   void progress();
 
+  // Asks the operator to detach the bar, then proves it before the robot moves on: the ball
+  // moves a fraction of a millimetre along the line to the chuck it was on, and the bar must
+  // not follow (a detach confirmed with the bar still on would otherwise meet a whole move at
+  // full speed). StopRun when it follows, the bar recorded as maybe attached.
+  void detach(int shell_number, const std::string& message);
+  // The operator's nudge of `mm` along the bar's line at a connect prompt, in creeping steps
+  // watched for a bar that follows; where the robot stands after it.
+  JointsDeg nudge(const ShellPlan& shell, JointsDeg q, double mm);
   // Up to the bar attached, read near zero and checked; the joints where the robot stands.
   JointsDeg connect(const ShellPlan& shell);
   // After a connect: the ball moves a small step along the expected bar line and back past the
@@ -44,8 +52,9 @@ class ShellRunner {
   // Dwells, measures and records a data point (on disk before the robot moves again); the actual
   // joints. StopRun when the shell's connection looks bad (ShellWatch).
   JointsDeg recordPoint(const ShellPlan& planned, const PlanStep& step, double point_planned_s);
-  // Fits the shell set that `shell` completes, if it completes one.
-  void completeSet(std::size_t shell_index);
+  // Fits the shell set that `shell` completes, if it completes one; `only_unfitted`: only when
+  // the set has no result in the run folder yet (a set measured before a kill cut its fit short).
+  void completeSet(std::size_t shell_index, bool only_unfitted = false);
 
   // The corrective move's target (centring.hpp), or StopRun.
   JointsDeg corrected(const ShellPlan& shell, const JointsDeg& q, double deflection_mm) const;

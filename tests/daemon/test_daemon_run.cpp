@@ -16,6 +16,7 @@
 #include <robocal/sim/operator.hpp>
 #include <robocal/solver/calibrate.hpp>
 
+#include <filesystem>
 #include <fstream>
 #include <random>
 #include <set>
@@ -53,7 +54,9 @@ TEST_CASE("a full run to RESULT recovers the true robot", "[e2e]") {
   const json ack = c->request({{"cmd", "start"}, {"token", cell.daemon->token()}}, 30, "ACK");
   REQUIRE(ack["class"] == "ACK");
   std::vector<json> seen;
-  REQUIRE(cell.operate(*c, {"done", "paused", "error", "aborted"}, 240, &seen) == "done");
+  const std::string end = cell.operate(*c, {"done", "paused", "error", "aborted"}, 240, &seen);
+  INFO(c->request({{"cmd", "status"}}, 10, "STATUS").dump());
+  REQUIRE(end == "done");
 
   const json result = c->request({{"cmd", "result"}}, 10, "RESULT");
   CHECK(result["rank"] == 36);
@@ -353,4 +356,55 @@ TEST_CASE("faults the drivers absorb reach the event log, and each point logs it
   }
   CHECK(timings == samples.size());
   CHECK(bar_faults >= 1);
+}
+
+TEST_CASE("a kill while a set is fitted: resume fits it again and the run ends with its result",
+          "[e2e]") {
+  Cell cell({"B1C1", "B2C2", "B3C3"}, 33, true, 60);
+  auto c = cell.daemon->client();
+  c->send({{"cmd", "watch"}, {"enable", true}});
+  REQUIRE(c->request({{"cmd", "start"}, {"token", cell.daemon->token()}}, 30, "ACK")["class"] ==
+          "ACK");
+  // The operator's work up to the set's end; the daemon is killed as the set's fit starts.
+  std::vector<json> seen;
+  bool set_complete = false;
+  for (int i = 0; i < 1200 && !set_complete; ++i) {
+    seen.clear();
+    cell.operate(*c, {}, 0.2, &seen);
+    for (const json& o : seen)
+      set_complete = set_complete || (o["class"] == "EVENT" && o["event"] == "set_complete");
+  }
+  REQUIRE(set_complete);
+  cell.daemon->kill9();
+  std::vector<std::string> runs;
+  for (const auto& e : std::filesystem::directory_iterator(cell.daemon->dataDir() + "/runs"))
+    runs.push_back(e.path().filename().string());
+  REQUIRE(runs.size() == 1);
+  const std::string run_id = runs.front();
+  const std::string result_file = cell.runDir(run_id) + "/result-set1.json";
+  // The fit takes a second or so: the kill nearly always lands in it. When the fit won the race,
+  // the disk is put as a kill during it leaves it (no result, the run not done).
+  const bool fit_won = std::filesystem::exists(result_file);
+  if (fit_won) {
+    WARN("the fit finished before the kill: its result is removed as a kill during it would");
+    std::filesystem::remove(result_file);
+    std::ofstream(cell.runDir(run_id) + "/state.json") << R"({"status": "running"})";
+  }
+  cell.daemon->start();
+  c = cell.daemon->client();
+  c->send({{"cmd", "watch"}, {"enable", true}});
+  const json st = c->request({{"cmd", "status"}}, 10, "STATUS");
+  CHECK(st["state"] == "interrupted");
+  CHECK(st["run"] == run_id);
+  REQUIRE(c->request({{"cmd", "resume"}, {"token", cell.daemon->token()}}, 30, "ACK")["class"] ==
+          "ACK");
+  REQUIRE(cell.operate(*c, {"done", "paused", "error"}, 120) == "done");
+  CHECK(std::filesystem::exists(result_file));
+  const json result = c->request({{"cmd", "result"}}, 10, "RESULT");
+  CHECK(result["run"] == run_id);
+  CHECK(result["set"] == 1);
+  CHECK(result["rank"].get<int>() > 0);
+  // And a second resume after it has nothing to do: the run is done.
+  CHECK(c->request({{"cmd", "resume"}, {"token", cell.daemon->token()}}, 10, "ERROR")["class"] ==
+        "ERROR");
 }

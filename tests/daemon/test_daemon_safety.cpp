@@ -10,6 +10,7 @@
 #include <robocal/daemon/time_left.hpp>
 #include <robocal/formats/samples_csv.hpp>
 
+#include <cmath>
 #include <thread>
 
 using namespace robocal;
@@ -35,17 +36,48 @@ bool confirmAnyway(Cell& cell, proto::Client& c, const json& prompt, const std::
 
 }  // namespace
 
+namespace {
+// Steps along the expected bar line (the model predicting the commanded change) and across it.
+daemon::ProbeStep along(double commanded_mm, double change_mm) {
+  return {commanded_mm, change_mm, 0, std::nullopt};
+}
+daemon::ProbeStep across(double across_mm, double change_mm, double predicted_mm = 0.0005) {
+  return {0, change_mm, across_mm, predicted_mm};
+}
+}  // namespace
+
 TEST_CASE("the connection check passes a seated bar and fails a free one or a swapped chuck",
           "[connection]") {
-  CHECK(daemon::connectionCheckProblem({{0.4, 0.41}, {-0.8, -0.79}}).empty());
-  CHECK(daemon::connectionCheckProblem({{-0.4, -0.33}, {0.8, 0.86}}).empty());
-  CHECK_THAT(daemon::connectionCheckProblem({{0.4, 0.01}, {-0.8, 0.02}}), Contains("free bar"));
+  using daemon::connectionCheckProblem;
+  CHECK(connectionCheckProblem({along(0.4, 0.41), along(-0.8, -0.79)}).empty());
+  CHECK(connectionCheckProblem({along(-0.4, -0.33), along(0.8, 0.86)}).empty());
+  CHECK_THAT(connectionCheckProblem({along(0.4, 0.01), along(-0.8, 0.02)}), Contains("free bar"));
   // A bar in another chuck follows the ball only by the cosine between the two lines.
-  CHECK_THAT(daemon::connectionCheckProblem({{0.4, 0.15}, {-0.8, -0.3}}), Contains("chuck"));
-  CHECK_THAT(daemon::connectionCheckProblem({{0.4, -0.38}, {-0.8, 0.77}}), Contains("chuck"));
+  CHECK_THAT(connectionCheckProblem({along(0.4, 0.15), along(-0.8, -0.3)}), Contains("chuck"));
+  CHECK_THAT(connectionCheckProblem({along(0.4, -0.38), along(-0.8, 0.77)}), Contains("chuck"));
   // A chuck whose line is 45 degrees off: 0.7 of each step.
-  CHECK_THAT(daemon::connectionCheckProblem({{0.4, 0.283}, {-0.8, -0.566}}), Contains("chuck"));
-  CHECK_THAT(daemon::connectionCheckProblem({{-0.4, -0.36}, {0.8, 0.566}}), Contains("chuck"));
+  CHECK_THAT(connectionCheckProblem({along(0.4, 0.283), along(-0.8, -0.566)}), Contains("chuck"));
+  CHECK_THAT(connectionCheckProblem({along(-0.4, -0.36), along(0.8, 0.566)}), Contains("chuck"));
+}
+
+TEST_CASE("the connection check tells the named ball from a neighbour whose bar happens to fit",
+          "[connection]") {
+  using daemon::connectionCheckProblem;
+  // The issue's case: ball 2 on chuck 1 at a B1C1 prompt followed the along-line steps by
+  // +0.350/-0.697 for +0.4/-0.8 (0.87-0.88 of each: inside 12 % + 0.05 mm).
+  const std::vector<daemon::ProbeStep> along_only{along(0.4, 0.350), along(-0.8, -0.697)};
+  CHECK(connectionCheckProblem(along_only).empty());
+  // Across the line its bar, about 30 degrees off, turns with the ball: half the step.
+  auto wrong = along_only;
+  wrong.push_back(across(0.4, 0.01));
+  wrong.push_back(across(-0.4, -0.01));
+  wrong.push_back(across(0.4, 0.17));
+  CHECK_THAT(connectionCheckProblem(wrong), Contains("across the bar"));
+  CHECK_THAT(connectionCheckProblem(wrong), Contains("another ball"));
+  // The named ball barely sees a step across its own bar (the model's second-order change).
+  auto right = along_only;
+  for (const double mm : {0.4, -0.4, 0.4, -0.4}) right.push_back(across(mm, 0.02));
+  CHECK(connectionCheckProblem(right).empty());
 }
 
 TEST_CASE("time left follows the plan until the measured pace takes over", "[eta]") {
@@ -153,23 +185,103 @@ TEST_CASE("a bar left attached by an aborted run is detached before the next run
 }
 
 TEST_CASE("a bar still on the robot after a detach confirm stops the robot", "[e2e][safety]") {
-  // Slower motion, so the change shows long before the bar's range is used up.
-  Cell cell({"B1C1", "B2C2"}, 24, true, 60, 5);
-  cell.mistake = [&](proto::Client& c, const json& p) {
-    if (p["action"] != "detach") return false;
-    c.send({{"cmd", "confirm"}, {"shell", p["shell"]}, {"token", cell.daemon->token()}});
-    return true;  // confirmed, but the bar stays on
-  };
-  auto c = cell.daemon->client();
-  c->send({{"cmd", "watch"}, {"enable", true}});
-  REQUIRE(c->request({{"cmd", "start"}, {"token", cell.daemon->token()}}, 30, "ACK")["class"] ==
-          "ACK");
-  REQUIRE(cell.operate(*c, {"paused", "done", "error"}, 240) == "paused");
-  const json st = c->request({{"cmd", "status"}}, 10, "STATUS");
-  INFO(st.dump());
-  CHECK_THAT(st["reason"].get<std::string>(), Contains("believed detached"));
-  CHECK(st["bar_attached"] == true);
-  CHECK(cell.sim->status("moving") == "0");
+  // The robot's speed does not matter: the first step after a detach is half a millimetre. At
+  // real time (1) and 100 times faster; shells of six points, so that real time stays short.
+  for (const double time_scale : {1.0, 100.0}) {
+    DYNAMIC_SECTION("time scale " << time_scale) {
+      Cell cell({"B1C1", "B2C2"}, 24, true, 180, time_scale);
+      cell.mistake = [&](proto::Client& c, const json& p) {
+        if (p["action"] != "detach") return false;
+        c.send({{"cmd", "confirm"}, {"shell", p["shell"]}, {"token", cell.daemon->token()}});
+        return true;  // confirmed, but the bar stays on
+      };
+      auto c = cell.daemon->client();
+      c->send({{"cmd", "watch"}, {"enable", true}});
+      REQUIRE(c->request({{"cmd", "start"}, {"token", cell.daemon->token()}}, 30, "ACK")["class"] ==
+              "ACK");
+      REQUIRE(cell.operate(*c, {"paused", "done", "error"}, 240) == "paused");
+      const json st = c->request({{"cmd", "status"}}, 10, "STATUS");
+      INFO(st.dump());
+      CHECK_THAT(st["reason"].get<std::string>(), Contains("still on the robot"));
+      CHECK(st["bar_attached"] == true);
+      CHECK(cell.sim->status("moving") == "0");
+      CHECK(cell.sim->status("broken_events") == "0");
+      // Taken off at the detach asked again, the run goes on to its end.
+      cell.mistake = nullptr;
+      REQUIRE(c->request({{"cmd", "resume"}, {"token", cell.daemon->token()}}, 30,
+                         "ACK")["class"] == "ACK");
+      CHECK(cell.operate(*c, {"done", "paused", "error"}, 240) == "done");
+      CHECK(cell.sim->status("broken_events") == "0");
+    }
+  }
+}
+
+TEST_CASE("a neighbouring ball whose bar happens to fit fails the connection check",
+          "[e2e][connection]") {
+  for (const double time_scale : {1.0, 100.0}) {
+    DYNAMIC_SECTION("time scale " << time_scale) {
+      Cell cell({"B1C1", "B2C2"}, 22, true, 180, time_scale);
+      cell.mistake = [&](proto::Client& c, const json& p) {
+        // Asked for ball 1 on chuck 1, the operator seats ball 2 there with a bar that fits.
+        return p["action"] == "connect" && p["ball"] == 1 &&
+               confirmAnyway(cell, c, p, "connect B2C1 bar_mm=here");
+      };
+      auto c = cell.daemon->client();
+      c->send({{"cmd", "watch"}, {"enable", true}});
+      REQUIRE(c->request({{"cmd", "start"}, {"token", cell.daemon->token()}}, 30, "ACK")["class"] ==
+              "ACK");
+      REQUIRE(cell.operate(*c, {"paused", "done", "error"}, 120) == "paused");
+      const json st = c->request({{"cmd", "status"}}, 10, "STATUS");
+      INFO(st.dump());
+      CHECK_THAT(st["reason"].get<std::string>(), Contains("connection check on shell 1"));
+      CHECK(loadSamplesFile(cell.runDir(st["run"]) + "/samples.csv").empty());
+      CHECK(cell.sim->status("broken_events") == "0");
+    }
+  }
+}
+
+TEST_CASE("a nudge asked for with the bar seated does not stretch it", "[e2e][safety]") {
+  for (const double time_scale : {1.0, 100.0}) {
+    DYNAMIC_SECTION("time scale " << time_scale) {
+      Cell cell({"B1C1", "B2C2"}, 26, true, 180, time_scale);
+      std::vector<json> answers;  // what the daemon said to the nudge
+      cell.mistake = [&](proto::Client& c, const json& p) {
+        if (p["action"] != "connect" || !answers.empty()) return false;
+        REQUIRE_THAT(cell.sim->control("connect B1C1 bar_mm=here"), Contains("ok"));
+        c.send({{"cmd", "nudge"},
+                {"shell", p["shell"]},
+                {"mm", 5.0},
+                {"token", cell.daemon->token()}});
+        for (int i = 0; i < 300; ++i) {
+          const auto o = c.read(0.1);
+          if (!o) continue;
+          if ((*o)["class"] == "ERROR" || ((*o)["class"] == "EVENT" && (*o)["event"] == "nudged")) {
+            answers.push_back(*o);
+            break;
+          }
+          if ((*o)["class"] == "EVENT" && (*o)["event"] == "nudge_stopped") answers.push_back(*o);
+        }
+        c.send({{"cmd", "confirm"}, {"shell", p["shell"]}, {"token", cell.daemon->token()}});
+        return true;
+      };
+      auto c = cell.daemon->client();
+      c->send({{"cmd", "watch"}, {"enable", true}});
+      REQUIRE(c->request({{"cmd", "start"}, {"token", cell.daemon->token()}}, 30, "ACK")["class"] ==
+              "ACK");
+      const std::string end = cell.operate(*c, {"done", "paused", "error"}, 240);
+      INFO(c->request({{"cmd", "status"}}, 10, "STATUS").dump());
+      CHECK(end == "done");
+      REQUIRE_FALSE(answers.empty());
+      INFO(json(answers).dump());
+      // Refused (the reading says seated) or stopped within its first steps.
+      const bool refused = answers.front()["class"] == "ERROR";
+      const bool stopped = answers.front()["class"] == "EVENT" &&
+                           answers.front()["event"] == "nudge_stopped" &&
+                           std::abs(answers.front()["moved_mm"].get<double>()) <= 0.51;
+      CHECK((refused || stopped));
+      CHECK(cell.sim->status("broken_events") == "0");
+    }
+  }
 }
 
 TEST_CASE("start is refused with the port's error when a device is missing", "[e2e]") {
@@ -192,7 +304,8 @@ TEST_CASE("start is refused with the port's error when a device is missing", "[e
 }
 
 TEST_CASE("a shell whose points jump above the run's pauses it", "[shellwatch]") {
-  daemon::ShellWatch w;
+  const double soft_limit_mm = 1.0;  // where the run re-centres
+  daemon::ShellWatch w(soft_limit_mm);
   w.startShell();
   for (int i = 0; i < 12; ++i) CHECK(w.point(i % 2 ? 0.05 : -0.04, 0.02).empty());
   w.startShell();
@@ -201,17 +314,42 @@ TEST_CASE("a shell whose points jump above the run's pauses it", "[shellwatch]")
   std::string problem;
   for (int i = 0; i < 3 && problem.empty(); ++i) problem = w.point(0.05, 0.4);
   CHECK_THAT(problem, Contains("reading spread"));
-  // Deflections that stay large are the other sign of a bad seat.
-  daemon::ShellWatch d;
+  // Deflections that stay past the re-centring threshold are the other sign of a bad seat.
+  daemon::ShellWatch d(soft_limit_mm);
   d.startShell();
   for (int i = 0; i < 12; ++i) d.point(0.05, 0.02);
   d.startShell();
-  for (int i = 0; i < 4; ++i) CHECK(d.point(-0.7, 0.02).empty());
-  CHECK_THAT(d.point(-0.7, 0.02), Contains("deflection"));
+  for (int i = 0; i < 4; ++i) CHECK(d.point(-1.1, 0.02).empty());
+  CHECK_THAT(d.point(-1.1, 0.02), Contains("deflection"));
   // The first shell has nothing to be compared with.
-  daemon::ShellWatch first;
+  daemon::ShellWatch first(soft_limit_mm);
   first.startShell();
   for (int i = 0; i < 12; ++i) CHECK(first.point(0.9, 0.5).empty());
+}
+
+TEST_CASE("a shell that starts legally off zero does not pause the run", "[shellwatch]") {
+  // Seeds 1 and 7 of the issue: early shells near 0.08 mm, a later one at 0.45 mm (under the
+  // re-centring threshold, as the model's own error leaves it) with steady readings.
+  daemon::ShellWatch w(1.0);
+  for (int shell = 0; shell < 6; ++shell) {
+    w.startShell();
+    for (int i = 0; i < 12; ++i) CHECK(w.point(i % 2 ? 0.08 : -0.07, 0.02).empty());
+  }
+  w.startShell();
+  for (int i = 0; i < 12; ++i) {
+    INFO("point " << i);
+    CHECK(w.point(0.45 + 0.1 * std::sin(i), 0.02).empty());
+  }
+  // The same shell with the ball worked loose: the spread says so within 5 points.
+  w.startShell();
+  std::string problem;
+  int points = 0;
+  while (problem.empty() && points < 12) {
+    ++points;
+    problem = w.point(0.45, 0.6);
+  }
+  CHECK(points <= 5);
+  CHECK_THAT(problem, Contains("reading spread"));
 }
 
 TEST_CASE("a ball working loose mid-shell pauses the run", "[e2e][shellwatch]") {

@@ -11,7 +11,10 @@
 #include <robocal/formats/model_json.hpp>
 #include <robocal/planner/cell_json.hpp>
 
+#include <cmath>
 #include <condition_variable>
+#include <mutex>
+#include <optional>
 #include <set>
 
 using namespace robocal;
@@ -245,19 +248,20 @@ TEST_CASE("run states: nudges at a connect prompt move the ball, within their li
   };
   REQUIRE(h.run().start(h.plan()).empty());
   REQUIRE(h.waitState({"awaiting_confirm"}, 30) == "awaiting_confirm");
-  for (int i = 0; i < 200 && h.events("nudged").empty(); ++i)
+  // A nudge creeps in steps of the detached threshold, each watched: seconds for 5 mm.
+  for (int i = 0; i < 1000 && h.events("nudged").empty(); ++i)
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   REQUIRE(h.events("nudged").size() == 1);
   CHECK(h.events("nudged")[0]["mm"] == 2.0);
   CHECK(h.run().nudge(1, 5).empty());
-  for (int i = 0; i < 200 && h.events("nudged").size() < 2; ++i)
+  for (int i = 0; i < 1000 && h.events("nudged").size() < 2; ++i)
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   CHECK_FALSE(h.run().nudge(1, 4).empty());  // 11 mm in all for this connection
   // Back to where the plan put the ball: the bar, attached, then reads near zero.
   for (const double mm : {-5.0, -2.0}) {
     const std::size_t before = h.events("nudged").size();
     REQUIRE(h.run().nudge(1, mm).empty());
-    for (int i = 0; i < 200 && h.events("nudged").size() == before; ++i)
+    for (int i = 0; i < 1000 && h.events("nudged").size() == before; ++i)
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
   CHECK(h.events("nudged").size() == 4);
@@ -265,6 +269,69 @@ TEST_CASE("run states: nudges at a connect prompt move the ball, within their li
   REQUIRE(h.run().confirm(1).empty());
   REQUIRE(h.waitState({"done", "paused", "error"}) == "done");
   CHECK_FALSE(h.run().nudge(1, 1).empty());  // no prompt pending
+  CHECK(h.problems().empty());
+}
+
+TEST_CASE("run states: a nudge with the bar already seated stops at once, the bar unharmed",
+          "[daemon][states]") {
+  Harness h({"B1C1"}, {0});
+  std::mutex answer_mutex;  // the answer is written on the run thread
+  std::optional<std::string> nudge_answer;
+  const auto answer = [&] {
+    std::lock_guard lock(answer_mutex);
+    return nudge_answer;
+  };
+  bool nudged = false;  // run thread only
+  h.at_prompt = [&](const json& p) {
+    if (p["action"] != "connect" || nudged) return true;
+    nudged = true;
+    h.cell().attach(1, 1, 0);  // the operator seats the bar, then asks for a nudge anyway
+    const std::string refused = h.run().nudge(1, 5);
+    std::lock_guard lock(answer_mutex);
+    nudge_answer = refused;
+    return false;
+  };
+  REQUIRE(h.run().start(h.plan()).empty());
+  REQUIRE(h.waitState({"awaiting_confirm"}, 30) == "awaiting_confirm");
+  // Refused outright when the reading has left the free bar's; else it creeps and stops.
+  for (int i = 0; i < 1000 && (!answer() || (answer()->empty() && h.events("nudged").empty())); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  REQUIRE(answer());
+  INFO(*answer());
+  if (answer()->empty()) {
+    REQUIRE(h.events("nudge_stopped").size() == 1);
+    CHECK(std::abs(h.events("nudge_stopped")[0]["moved_mm"].get<double>()) <= 0.51);
+  } else {
+    CHECK_THAT(*answer(), Catch::Contains("nudge refused"));
+  }
+  CHECK(h.cell().worstDeflection() < 0.6);  // 5 mm at full speed would have been 5 mm
+  REQUIRE(h.run().confirm(1).empty());
+  REQUIRE(h.waitState({"done", "paused", "error"}) == "done");
+  CHECK(h.problems().empty());
+}
+
+TEST_CASE("run states: a detach confirmed with the bar still on is caught by a small step",
+          "[daemon][states]") {
+  Harness h({"B1C1", "B2C2"}, {0});
+  bool fooled = false;
+  h.at_prompt = [&](const json& p) {
+    if (p["action"] != "detach" || fooled) return true;
+    fooled = true;  // confirmed, the bar left on
+    h.expect(h.run().confirm(p["shell"].get<int>()).empty(), "confirm refused");
+    return false;
+  };
+  REQUIRE(h.run().start(h.plan()).empty());
+  REQUIRE(h.waitState({"paused", "done", "error"}) == "paused");
+  const std::string reason = h.seen("STATE").back()["reason"];
+  CHECK_THAT(reason, Catch::Contains("still on the robot"));
+  CHECK(h.run().status().bar_attached);
+  CHECK(h.cell().attached());
+  CHECK(h.cell().worstDeflection() < 0.7);  // the probe's half millimetre, not a whole move
+  // Resumed, the detach is asked again; done properly, the run goes on to the end.
+  REQUIRE(h.run().resume("").empty());
+  REQUIRE(h.waitState({"paused", "done", "error"}) == "done");
+  CHECK(h.seen("SAMPLE").size() == static_cast<std::size_t>(h.points()));
+  CHECK(h.events("detach_probe").size() >= 3);
   CHECK(h.problems().empty());
 }
 

@@ -3,6 +3,11 @@
 // deflection (the refined model's error there: the points are planned with it) and the spread of
 // the readings in its window. A shell whose recent points jump well above what the run has seen
 // so far is suspect: its last kPoints points are compared, as medians, with all earlier points.
+// A deflection is judged only past the run's re-centring threshold (the soft limit, where a move
+// stops and the ball is moved back along the bar): below it a deflection is the model's ordinary
+// error, which the centring corrects as it goes, and a shell may start anywhere up to it (a floor
+// of 0.3 mm paused ordinary runs whose shells sat at 0.45 mm). A loose ball shows first in the
+// spread of the readings at a point, which is judged from kFloorSpreadMm.
 // Pure decision, no I/O: the run feeds it and pauses on a problem.
 #pragma once
 
@@ -19,7 +24,10 @@ class ShellWatch {
   static constexpr std::size_t kPoints = 5;           // recent points judged together
   static constexpr std::size_t kBaselinePoints = 10;  // earlier points needed to judge at all
   static constexpr double kJump = 5.0;                // recent median over baseline median
-  static constexpr double kFloorDeflectionMm = 0.3, kFloorSpreadMm = 0.05;
+  static constexpr double kFloorSpreadMm = 0.05;
+
+  // `recentre_mm`: the deflection past which the run re-centres the bar (its soft limit).
+  explicit ShellWatch(double recentre_mm) : floor_deflection_mm_(recentre_mm) {}
 
   void startShell() {
     for (double v : shell_deflections_) baseline_deflections_.push_back(v);
@@ -48,7 +56,8 @@ class ShellWatch {
     std::string problem =
         judge(shell_spreads_, baseline_spreads_, kFloorSpreadMm, "reading spread");
     if (problem.empty())
-      problem = judge(shell_deflections_, baseline_deflections_, kFloorDeflectionMm, "deflection");
+      problem =
+          judge(shell_deflections_, baseline_deflections_, floor_deflection_mm_, "deflection");
     return problem;
   }
 
@@ -57,6 +66,7 @@ class ShellWatch {
     std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
     return v[v.size() / 2];
   }
+  double floor_deflection_mm_;
   std::vector<double> baseline_deflections_, baseline_spreads_;
   std::vector<double> shell_deflections_, shell_spreads_;
 };

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstddef>
 #include <stdexcept>
 #include <string>
 
@@ -14,9 +15,14 @@ class FormatError : public std::runtime_error {
 
 // Whole file as a string; FormatError naming the path when it cannot be read.
 std::string readTextFile(const std::string& path);
-// Writes to path.tmp, fsyncs and renames over path, so a crash leaves the old or the new file.
+// Writes to path.tmp, fsyncs and renames over path, then fsyncs the folder, so a crash (a power
+// cut too) leaves the old or the new file.
 void writeTextFileAtomic(const std::string& path, const std::string& text);
-// Appends text with one write and fsyncs it: a crash leaves at most a torn last line.
+// Appends text with one write and fsyncs it (and the folder when it creates the file): a crash
+// leaves at most a torn last line.
 void appendTextFileDurably(const std::string& path, const std::string& text);
+// Cuts a last line that has no line ending (torn by a crash) off a line-per-record file, durably;
+// the number of bytes cut (0: the file ends in a whole line, is empty or does not exist).
+std::size_t cutTornLastLine(const std::string& path);
 
 }  // namespace robocal
