@@ -63,4 +63,6 @@ echo "== where the user works: the true robot commanded with nominal and with co
   --cell "$cell" --svg "$out/accuracy.svg"
 echo
 echo "Done. Run folder: $run_dir; calibrated model: $out/calibrated.json; report: $out/report/"
-echo "Corrected joint targets from it: robocal compensate --model $out/calibrated.json --targets FILE --out FILE"
+echo "Corrected joint targets from it: $bin compensate --model $out/calibrated.json --targets FILE --out FILE"
+echo "robocal is not installed: call it as $bin, or put it on PATH for this shell with"
+echo "  export PATH=\"$(dirname "$bin"):\$PATH\""

@@ -1,6 +1,8 @@
 // robocal-cellsim: command-line options of the simulated cell (see cellsim.hpp, docs/drivers.md).
 #include "cellsim.hpp"
 
+#include <robocal/build_info.hpp>
+
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -11,7 +13,8 @@
 
 namespace {
 
-constexpr const char* kHelp = R"(usage: robocal-cellsim --model TRUTH.json [options]
+constexpr const char* kHelp =
+    R"(usage: robocal-cellsim --model TRUTH.json [options] | --version | --help
 
 A simulated robot cell on two pseudo-terminals: a VAL II controller and a ball-bar reader.
 Prints "val PATH", "bar PATH" (and "control PATH"), then "ready". Control commands, one per
@@ -141,7 +144,8 @@ int main(int argc, char** argv) {
                                                {"estop-on-move", true},
                                                {"bar-no-probe", false},
                                                {"verbose", false},
-                                               {"help", false}};
+                                               {"help", false},
+                                               {"version", false}};
     for (int i = 1; i < argc; ++i) {
       std::string a = argv[i];
       if (a.rfind("--", 0) != 0) throw std::invalid_argument("unexpected argument '" + a + "'");
@@ -157,6 +161,10 @@ int main(int argc, char** argv) {
     }
     if (v.count("help")) {
       std::fputs(kHelp, stdout);
+      return 0;
+    }
+    if (v.count("version")) {
+      std::printf("robocal-cellsim %s\n", robocal::build::kVersion);
       return 0;
     }
     const auto has = [&](const char* k) { return v.count(k) > 0; };

@@ -1,6 +1,8 @@
 // robocal-cellsim's stdin control channel (the socket one is used by every other test).
 #include <catch2/catch.hpp>
 
+#include <robocal/build_info.hpp>
+
 #include <cstdio>
 #include <string>
 
@@ -20,4 +22,15 @@ TEST_CASE("Cellsim: control commands on stdin, replies on stdout", "[drivers][ce
   CHECK_THAT(out, Catch::Contains("error: "));  // there is no ball 9
   CHECK_THAT(out, Catch::Contains("ok 0\n"));
   CHECK_THAT(out, Catch::Contains("ok bye"));
+}
+
+TEST_CASE("Cellsim: --version says the project's version, as robocal and robocald do",
+          "[drivers][cellsim]") {
+  FILE* p = ::popen(ROBOCAL_BINARY_DIR "/sim/cellsim/robocal-cellsim --version 2>&1", "r");
+  REQUIRE(p);
+  std::string out;
+  char buf[256];
+  while (std::fgets(buf, sizeof buf, p)) out += buf;
+  CHECK(::pclose(p) == 0);
+  CHECK(out == std::string("robocal-cellsim ") + robocal::build::kVersion + "\n");
 }

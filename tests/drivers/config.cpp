@@ -5,6 +5,8 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
+#include <fstream>
+
 using namespace robocal::drivers;
 using nlohmann::json;
 
@@ -34,7 +36,26 @@ TEST_CASE("Config: defaults are hardware.md's and survive a JSON round trip", "[
 TEST_CASE("Config: the shipped example parses", "[drivers][config]") {
   const DriversConfig c = loadDriversConfig(ROBOCAL_SOURCE_DIR "/config/drivers.json");
   CHECK(c.val.serial.baud == 9600);
-  CHECK_FALSE(c.bar.value_regex.empty());
+  CHECK(c.val.dialect == "val2");
+  CHECK(c.bar.format == "mm_suffix");  // the preset's value pattern, not one pinned in the file
+  CHECK(c.bar.value_regex.empty());
+}
+
+TEST_CASE("Config: switching the dialect alone in the shipped file gives that preset",
+          "[drivers][config]") {
+  // The shipped file names the ports and the dialect and nothing a preset sets: a user who
+  // changes "dialect" gets the whole preset (a file that pinned VAL II's prompts kept them).
+  std::ifstream in(ROBOCAL_SOURCE_DIR "/config/drivers.json");
+  const json shipped = json::parse(in);
+  for (const std::string& dialect : valPresetNames()) {
+    INFO(dialect);
+    json edited = shipped;
+    edited["val"]["dialect"] = dialect;
+    const DriversConfig c = driversConfigFromJson(edited, "drivers.json");
+    ValConfig expected = valPreset(dialect);
+    expected.serial = c.val.serial;
+    CHECK(toJson(DriversConfig{expected, c.bar})["val"] == toJson(c)["val"]);
+  }
 }
 
 TEST_CASE("Config: errors name the key", "[drivers][config]") {

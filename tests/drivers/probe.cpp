@@ -118,7 +118,8 @@ TEST_CASE("Probe: the robocal probe command reads robocald's config file",
   CHECK_THAT(out, Catch::Contains(" mm "));
 }
 
-TEST_CASE("Probe: the bring-up move test in each dialect preset", "[drivers][probe][cli]") {
+TEST_CASE("Probe: the bring-up move test in each dialect preset, switched in the shipped config",
+          "[drivers][probe][cli]") {
   struct Case {
     std::string dialect;
     std::vector<std::string> sim_args;
@@ -132,8 +133,15 @@ TEST_CASE("Probe: the bring-up move test in each dialect preset", "[drivers][pro
       std::vector<std::string> args{"--time-scale", "2"};  // 2 deg at SPEED 10: 0.17 s
       args.insert(args.end(), c.sim_args.begin(), c.sim_args.end());
       CellSimProcess sim(args, R"({"val": {"dialect": ")" + c.dialect + R"("}})");
+      // The shipped config/drivers.json with its dialect switched and its ports pointed at the
+      // simulator, nothing else: the preset must carry the rest.
+      std::ifstream shipped(ROBOCAL_SOURCE_DIR "/config/drivers.json");
+      nlohmann::json edited = nlohmann::json::parse(shipped);
+      edited["val"]["dialect"] = c.dialect;
+      edited["val"]["serial"]["path"] = sim.valPath();
+      edited["bar"]["serial"] = {{"path", sim.barPath()}};
       const std::string config = sim.dir() + "/drivers.json";
-      std::ofstream(config) << toJson(sim.driversConfig()).dump(2);
+      std::ofstream(config) << edited.dump(2);
 
       // Without the confirmation nothing is sent: the arm does not move.
       const auto [refused_code, refused_out] =
