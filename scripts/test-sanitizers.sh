@@ -7,7 +7,9 @@ set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 "$root/scripts/setup.sh"
 export ROBOCAL_BUILD_DIR=${ROBOCAL_ASAN_BUILD_DIR:-$root/build-asan}
-"$root/scripts/build.sh" -DROBOCAL_SANITIZE=address
+# -O1, as the sanitizers' documentation suggests: faster to build than -O2 and still fast to run.
+"$root/scripts/build.sh" -DROBOCAL_SANITIZE=address \
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 ${ROBOCAL_DEBUG_FLAGS:--g} -DNDEBUG"
 reports=$ROBOCAL_BUILD_DIR/sanitizer-reports
 rm -rf "$reports"
 mkdir -p "$reports"
@@ -15,7 +17,8 @@ export ASAN_OPTIONS="log_path=$reports/asan ${ASAN_OPTIONS:-}"
 export UBSAN_OPTIONS="log_path=$reports/ubsan print_stacktrace=1 ${UBSAN_OPTIONS:-}"
 cd "$ROBOCAL_BUILD_DIR"
 status=0
-ctest --output-on-failure -j "$(nproc)" --timeout 900 || status=$?
+# Two tests a core: sanitized processes use more of the CPU than plain ones (ROBOCAL_TEST_JOBS).
+ctest --output-on-failure -j "${ROBOCAL_TEST_JOBS:-$((2 * $(nproc)))}" --timeout 900 || status=$?
 if compgen -G "$reports/*" >/dev/null; then
   echo "Sanitizer reports:"
   for f in "$reports"/*; do

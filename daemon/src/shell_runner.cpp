@@ -337,8 +337,7 @@ void ShellRunner::verifyConnection(const ShellPlan& shell, JointsDeg& q) {
     if (!target)
       throw StopRun{StopRun::kFault, "connection check on shell " + std::to_string(shell.shell) +
                                          ": its step is refused: " + refused};
-    const double predicted_mm =
-        barLengthMm(model, c, *target) - barLengthMm(model, c, commanded);
+    const double predicted_mm = barLengthMm(model, c, *target) - barLengthMm(model, c, commanded);
     q = ctx_.move(*target, true);
     commanded = *target;
     const double after_mm = settledMeasurement().deflection_mm;
