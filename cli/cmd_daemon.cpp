@@ -4,6 +4,7 @@
 #include "daemon_view.hpp"
 
 #include <robocal/formats/error.hpp>
+#include <robocal/kinematics/sample.hpp>
 #include <robocal/proto/client.hpp>
 #include <robocal/proto/objects.hpp>
 #include <robocal/sim/operator.hpp>
@@ -14,12 +15,14 @@
 #include <boost/asio/streambuf.hpp>
 #include <boost/asio/write.hpp>
 
+#include <sys/ioctl.h>
 #include <unistd.h>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <functional>
 #include <set>
+#include <thread>
 
 namespace robocal::cli {
 namespace {
@@ -209,7 +212,9 @@ int pause(const std::vector<std::string>& argv) {
   return simple(
       argv, "pause", true, {"reason"},
       [](const Args& a, json& r) { r["reason"] = a.get("reason", ""); },
-      "usage: robocal pause [--reason TEXT] [options]\n");
+      "usage: robocal pause [--reason TEXT] [options]\n\n"
+      "Stops the robot at once (mid-move if it is moving) and pauses the run; `robocal resume`\n"
+      "continues it, re-planned from where the robot stands.\n");
 }
 int resume(const std::vector<std::string>& argv) {
   return simple(
@@ -224,6 +229,30 @@ int abortRun(const std::vector<std::string>& argv) {
       argv, "abort", true, {"reason"},
       [](const Args& a, json& r) { r["reason"] = a.get("reason", ""); },
       "usage: robocal abort [--reason TEXT] [options]\n  Stops the robot now and ends the run.\n");
+}
+
+// The terminal's width in columns (100 when it cannot be told).
+std::size_t terminalWidth() {
+  winsize ws{};
+  if (::ioctl(STDOUT_FILENO, TIOCGWINSZ, &ws) == 0 && ws.ws_col >= 20) return ws.ws_col;
+  return 100;
+}
+
+// A new connection to robocald, tried every 2 s until `timeout_s` after `started` (0: forever);
+// null when the time is up.
+std::unique_ptr<proto::Client> reconnect(const Args& args,
+                                         std::chrono::steady_clock::time_point started,
+                                         double timeout_s) {
+  while (timeout_s <= 0 ||
+         std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count() <
+             timeout_s) {
+    std::this_thread::sleep_for(std::chrono::seconds(2));
+    try {
+      return connectTo(args);
+    } catch (const std::exception&) {  // not back yet
+    }
+  }
+  return nullptr;
 }
 
 constexpr const char* kWatchHelp = R"(usage: robocal watch [options]
@@ -269,11 +298,12 @@ int watch(const std::vector<std::string>& argv) {
   std::optional<double> bar;
   bool live_shown = false;
   auto last_draw = started;
+  const std::size_t width = terminalWidth();
   const auto say = [&](const std::string& text) {
     if (as_json) return;
     if (tty && live_shown) std::fputs("\r\033[K", stdout);
     live_shown = false;
-    std::fputs(text.c_str(), stdout);
+    std::fputs((tty ? wrapText(text, width) : text).c_str(), stdout);
     std::fflush(stdout);
   };
   const auto drawLive = [&](bool force) {
@@ -290,6 +320,11 @@ int watch(const std::vector<std::string>& argv) {
     say(promptText(prompt) + "\n");
     if (operator_socket.empty() || prompt == answered) return;
     answered = prompt;
+    // The live line names what the prompt is about, not the last shell's connection.
+    if (progress && prompt.action == proto::PromptAction::kConnect && prompt.ball && prompt.chuck) {
+      progress->shell = prompt.shell;
+      progress->connection = connectionName({*prompt.ball - 1, *prompt.chuck - 1});
+    }
     const auto control = [&](const std::string& c) { return cellsimControl(operator_socket, c); };
     for (const std::string& action : sim::answerPrompt(*client, prompt, control, tok, bar_mm))
       say("(simulated operator: " + action + ")\n");
@@ -303,7 +338,23 @@ int watch(const std::vector<std::string>& argv) {
       std::fprintf(stderr, "robocal watch: timed out after %.0f s\n", timeout_s);
       return 3;
     }
-    auto obj = client->read(0.5);
+    std::optional<json> obj;
+    try {
+      obj = client->read(0.5);
+    } catch (const proto::ClientError& e) {
+      // The daemon went away (a restart, an upgrade): say so on a line of its own, and watch
+      // again once it is back.
+      say(std::string("\n") + e.what() + "\nreconnecting every 2 s (Ctrl-C to stop)\n");
+      client = reconnect(args, started, timeout_s);
+      if (!client) {
+        std::fprintf(stderr, "robocal watch: robocald did not come back within %.0f s\n",
+                     timeout_s);
+        return 3;
+      }
+      say("reconnected to robocald\n");
+      client->send({{"cmd", "watch"}, {"enable", true}});
+      continue;
+    }
     if (!obj) continue;
     const std::string cls = proto::objectClass(*obj);
     if (as_json) std::printf("%s\n", obj->dump().c_str());
@@ -355,7 +406,7 @@ const RegisterCommand r2({"watch", "robocald: live bar, progress and prompts", w
 const RegisterCommand r3({"start", "robocald: start a calibration run", start});
 const RegisterCommand r4({"confirm", "robocald: the bar is connected as asked", confirm});
 const RegisterCommand r11({"nudge", "robocald: move the ball so the bar fits", nudge});
-const RegisterCommand r5({"pause", "robocald: pause the run at the next step", pause});
+const RegisterCommand r5({"pause", "robocald: stop the robot now; resume continues", pause});
 const RegisterCommand r6({"resume", "robocald: resume a paused or interrupted run", resume});
 const RegisterCommand r7({"abort", "robocald: stop the robot and end the run", abortRun});
 const RegisterCommand r8({"result", "robocald: the latest fit", result});

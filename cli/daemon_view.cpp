@@ -86,8 +86,37 @@ std::string stateText(proto::RunState to_state, const std::string& reason) {
   return out;
 }
 
+std::string wrapText(const std::string& text, std::size_t width) {
+  width = std::max<std::size_t>(width, 20);
+  std::string out;
+  std::size_t start = 0;
+  while (start < text.size()) {
+    std::size_t end = text.find('\n', start);
+    const bool newline = end != std::string::npos;
+    if (!newline) end = text.size();
+    std::string line = text.substr(start, end - start);
+    std::string indent;
+    while (line.size() + indent.size() > width) {
+      const std::size_t room = width - indent.size();
+      std::size_t cut = line.rfind(' ', room);
+      if (cut == std::string::npos || cut == 0) cut = line.find(' ', room);  // one long word
+      if (cut == std::string::npos) break;
+      out += indent + line.substr(0, cut) + "\n";
+      line = line.substr(line.find_first_not_of(' ', cut) == std::string::npos
+                             ? line.size()
+                             : line.find_first_not_of(' ', cut));
+      indent = "  ";
+    }
+    out += indent + line + (newline ? "\n" : "");
+    start = end + 1;
+  }
+  return out;
+}
+
 std::string progressLine(const proto::Progress& p, std::optional<double> bar_mm) {
   const int done = p.points_done, total = p.points_total;
+  if (total <= 0)
+    return std::string("no run in progress") + (bar_mm ? format("  bar %+.3f mm", *bar_mm) : "");
   constexpr int kWidth = 20;
   const int filled = total > 0 ? std::clamp(kWidth * done / total, 0, kWidth) : 0;
   std::string line = "[" + std::string(filled, '#') + std::string(kWidth - filled, '.') + "] " +

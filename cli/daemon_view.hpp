@@ -22,8 +22,13 @@ std::string promptText(const proto::Prompt& prompt);
 std::string stateText(const proto::State& state_event);
 std::string stateText(proto::RunState to, const std::string& reason);
 
-// The live line: `[#####.....] 25/108  shell 3/9 B1C3  left 0:03:25  bar +0.090 mm`.
+// The live line: `[#####.....] 25/108  shell 3/9 B1C3  left 0:03:25  bar +0.090 mm`; with no run
+// (no points planned) `no run in progress  bar +0.090 mm`.
 std::string progressLine(const proto::Progress& progress, std::optional<double> bar_mm);
+
+// `text` with every line longer than `width` broken at spaces (never inside a word unless a word
+// alone is longer), continuation lines indented by two spaces: a terminal wraps mid-word.
+std::string wrapText(const std::string& text, std::size_t width);
 
 std::string statusText(const proto::Status& status);
 std::string resultText(const proto::Result& result);

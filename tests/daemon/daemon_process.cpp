@@ -26,6 +26,11 @@ DaemonProcess::DaemonProcess(nlohmann::json config) : config_(std::move(config))
   std::ofstream(dir_ + "/robocald.json") << config_.dump(1);
 }
 
+void DaemonProcess::keepPort() {
+  config_["port"] = port_;
+  std::ofstream(dir_ + "/robocald.json") << config_.dump(1);
+}
+
 DaemonProcess::~DaemonProcess() {
   stop();
   // ROBOCAL_KEEP_TEST_DIRS=1 keeps the daemon's folder (its log, runs) to look into a failure.

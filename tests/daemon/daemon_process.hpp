@@ -21,6 +21,8 @@ class DaemonProcess {
   DaemonProcess& operator=(const DaemonProcess&) = delete;
 
   void start();  // runs robocald and waits until it listens
+  // The next start listens on the port this one got (a client that reconnects finds it).
+  void keepPort();
   void kill9();  // SIGKILL, as a crash or power loss would
   int stop();    // SIGTERM and wait: the exit code (128 + signal when killed by one, -1 if hung)
   bool running();

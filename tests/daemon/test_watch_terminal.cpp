@@ -136,3 +136,22 @@ TEST_CASE("robocal watch in a terminal and piped, at a prompt and while measurin
   CHECK(watch.waitForScreen(std::regex("state: aborted"), 30));
   CHECK(watch.running());
 }
+
+TEST_CASE("robocal watch says when robocald goes away and watches again once it is back",
+          "[watch]") {
+  Cell cell({"B1C1"}, 23, true, 45);
+  cell.daemon->keepPort();
+  const std::string port = std::to_string(cell.daemon->port());
+  TerminalProgram watch({binDir() + "/robocal", "watch", "--port", port, "--timeout-s", "60"});
+  REQUIRE(watch.waitForScreen(std::regex("state: idle"), 10));
+  // Idle: the live line says there is no run, not "0/0 shell 0/0".
+  CHECK(watch.waitForScreen(std::regex("no run in progress  bar [+-][0-9]\\.[0-9]{3} mm"), 10));
+  CHECK_FALSE(std::regex_search(watch.screen(), std::regex("0/0")));
+  REQUIRE(cell.daemon->stop() == 0);
+  INFO(watch.screen());
+  CHECK(watch.waitForScreen(
+      std::regex("\nrobocald closed the connection[^\n]*\nreconnecting every 2 s"), 10));
+  cell.daemon->start();
+  CHECK(watch.waitForScreen(std::regex("reconnected to robocald\n(.*\n)*state: idle"), 20));
+  CHECK(watch.running());
+}

@@ -75,6 +75,18 @@ def metrics(base):
     return samples
 
 
+def shots(driver, path, what):
+    """Screenshots at 1280 and 800 px wide beside `path` (console.png -> console-WHAT-1280.png),
+    then back to the test's own size."""
+    stem = path[:-4] if path.endswith(".png") else path
+    for width in (1280, 800):
+        driver.set_window_size(width, 1000)
+        time.sleep(0.6)  # a few frames at the new size
+        driver.save_screenshot(f"{stem}-{what}-{width}.png")
+    driver.set_window_size(1400, 1100)
+    check(True, f"screenshots of the {what} at 1280 and 800 px: {stem}-{what}-*.png")
+
+
 def robocal(a, *args):
     return subprocess.run([a.robocal, *args], capture_output=True, text=True, timeout=60).stdout
 
@@ -102,8 +114,15 @@ def run(driver, a, base, token):
     message = wait_until("a connect prompt appears",
                          lambda: "Connect" in text(driver, "prompt-message") and
                          text(driver, "prompt-message"))
-    check(text(driver, "state") == "awaiting_confirm", "state awaiting_confirm: " + message)
+    check(text(driver, "state") == "Waiting for the operator", "the state in words: " + message)
     check(driver.find_element(By.ID, "confirm").is_enabled(), "Confirm is enabled")
+    # What the prompt is about, in the run panel too (it read "shell 0 of 9" and no connection).
+    wait_until("the run id is shown", lambda: text(driver, "run") not in ("", "–"))
+    check(text(driver, "shell").startswith("1 of "), "the prompt's shell: " + text(driver, "shell"))
+    check(text(driver, "connection").startswith("B"), "its connection: " + text(driver, "connection"))
+    check(driver.find_element(By.ID, "pause").is_enabled(), "Pause is enabled while a run goes")
+    check(not driver.find_element(By.ID, "resume").is_enabled(), "Resume is not: nothing to resume")
+    shots(driver, a.screenshot, "prompt")
 
     # Confirm without the token is refused; the run stays where it is.
     driver.find_element(By.ID, "confirm").click()
@@ -112,7 +131,7 @@ def run(driver, a, base, token):
     check("error" in driver.find_element(By.ID, "last-reply").get_attribute("class"),
           "Confirm without the token is refused: " + refusal)
     time.sleep(0.5)
-    check(text(driver, "state") == "awaiting_confirm", "the run still waits for the operator")
+    check(text(driver, "state") == "Waiting for the operator", "the run still waits for the operator")
     m = metrics(base)
     check(m.get("robocal_run_state{state=awaiting_confirm}") == 1.0,
           "/metrics parses (prometheus_client) and says awaiting_confirm")
@@ -127,7 +146,7 @@ def run(driver, a, base, token):
     # The token typed once into the page; Confirm with it goes on.
     driver.find_element(By.ID, "token").send_keys(token)
     driver.find_element(By.ID, "token-save").click()
-    check(text(driver, "token-state") == "token set for this tab", "the token is kept for the tab")
+    check(text(driver, "token-state").startswith("token set for this tab"), "the token is kept for the tab")
     check(token not in driver.current_url, "the token is not in the URL")
     check(driver.find_element(By.ID, "token").get_attribute("value") == "",
           "the token field is emptied once used")
@@ -151,14 +170,29 @@ def run(driver, a, base, token):
     check(m.get("robocal_samples_total", 0) >= 3, f"/metrics counts samples: {m.get('robocal_samples_total')}")
     check(m.get("robocal_points_done", 0) == points_done(driver), "/metrics and the page agree on points done")
 
+    # Paused: loud, in the operator panel, with what gets the run going.
+    driver.find_element(By.ID, "pause").click()
+    wait_until("the run pauses", lambda: text(driver, "state") == "PAUSED", timeout_s=30)
+    panel = driver.find_element(By.ID, "prompt")
+    check("stopped" in panel.get_attribute("class"), "the operator panel turns to the pause")
+    check("paused at the console" in text(driver, "prompt-message") and
+          not text(driver, "prompt-message").startswith("PAUSED: paused"),
+          "it says why: " + text(driver, "prompt-message"))
+    check("Resume" in text(driver, "prompt-action"), "and what to do: " + text(driver, "prompt-action"))
+    check(driver.find_element(By.ID, "resume").is_enabled(), "Resume is enabled when paused")
+    check(not driver.find_element(By.ID, "pause").is_enabled(), "Pause is not")
+    shots(driver, a.screenshot, "paused")
+
     # Abort: two presses, the second ends the run.
     driver.find_element(By.ID, "abort").click()
     check("again" in text(driver, "last-reply"), "Abort asks for a second press")
     driver.find_element(By.ID, "abort").click()
-    wait_until("the run is aborted", lambda: text(driver, "state") == "aborted", timeout_s=30)
+    wait_until("the run is aborted", lambda: text(driver, "state") == "Aborted", timeout_s=30)
     check(True, "Abort from the page ends the run")
     wait_until("the run history shows it", lambda: "aborted" in text(driver, "runs"))
     check(True, "the run history lists the aborted run")
+    check(not driver.find_element(By.ID, "abort").is_enabled(), "Abort is disabled: nothing to end")
+    shots(driver, a.screenshot, "ended")
 
 
 if __name__ == "__main__":
