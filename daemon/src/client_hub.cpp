@@ -93,7 +93,7 @@ void ClientHub::accept() {
       } else {
         c->id = next_id_++;
         clients_[c->id] = c;
-        configureSocket(c->socket);
+        configureClientSocket(c->socket, limits_.unsent_max_bytes);
         spdlog::info("client {} connected from {}", c->id, c->peer);
         enqueue(c, proto::frame(greeting_()), false);
         read(c);
@@ -105,14 +105,13 @@ void ClientHub::accept() {
   });
 }
 
-void ClientHub::configureSocket(tcp::socket& socket) const {
+void configureClientSocket(tcp::socket& socket, int unsent_max_bytes) {
   // Lines go out as they come: with Nagle, a line waits while the previous one is unacknowledged,
   // up to the client's delayed ACK (40 ms) when the client is slow to read.
   boost::system::error_code ec;
   socket.set_option(tcp::no_delay(true), ec);
   if (ec) spdlog::warn("TCP_NODELAY: {}", ec.message());
 #ifdef TCP_NOTSENT_LOWAT
-  const int unsent_max_bytes = limits_.unsent_max_bytes;
   if (::setsockopt(socket.native_handle(), IPPROTO_TCP, TCP_NOTSENT_LOWAT, &unsent_max_bytes,
                    sizeof unsent_max_bytes) != 0)
     spdlog::warn("TCP_NOTSENT_LOWAT: {}", std::strerror(errno));

@@ -27,6 +27,9 @@ std::string labelValue(const std::string& v) {
   return out;
 }
 
+// Prometheus asks for base units: lengths are exposed in meters (the protocol's JSON keeps mm).
+constexpr double kMetersPerMm = 1e-3;
+
 std::string number(double v) {
   if (std::isnan(v)) return "NaN";
   if (std::isinf(v)) return v > 0 ? "+Inf" : "-Inf";
@@ -120,8 +123,8 @@ std::string Metrics::text(const json& status, const json& result, const Clients&
       .sample(status.value("bar_attached", false) ? 1 : 0);
   const json bar = status.value("bar", json());
   if (bar.is_object() && bar.contains("deflection_mm"))
-    e.family("robocal_bar_deflection_mm", "gauge", "The latest ball-bar reading, mm.")
-        .sample(numberOr(bar, "deflection_mm", NAN));
+    e.family("robocal_bar_deflection_meters", "gauge", "The latest ball-bar reading, meters.")
+        .sample(kMetersPerMm * numberOr(bar, "deflection_mm", NAN));
   e.family("robocal_bar_lines_total", "counter",
            "Ball-bar reader lines since the daemon started, by kind.")
       .counts(bar_lines_, "kind");
@@ -150,25 +153,26 @@ std::string Metrics::text(const json& status, const json& result, const Clients&
   const std::map<std::string, long> web_events = {
       {"refused", clients.web_counts.refused},
       {"stalled", clients.web_counts.stalled},
-      {"dropped_lines", clients.web_counts.dropped_lines}};
+      {"dropped_lines", clients.web_counts.dropped_lines},
+      {"http_refused", clients.web_counts.http_refused}};
   e.family("robocal_client_events_total", "counter",
            "Clients refused, closed as stuck or timed out, and readings dropped for slow ones.")
       .counts(tcp_events, "kind", {{"transport", "tcp"}})
       .counts(web_events, "kind", {{"transport", "web"}});
   if (result.value("available", true) && result.contains("rms_mm")) {
-    e.family("robocal_fit_rms_mm", "gauge", "The latest fit's residual RMS, mm.")
-        .sample(numberOr(result, "rms_mm", NAN));
+    e.family("robocal_fit_rms_meters", "gauge", "The latest fit's residual RMS, meters.")
+        .sample(kMetersPerMm * numberOr(result, "rms_mm", NAN));
     e.family("robocal_fit_samples", "gauge", "Samples in the latest fit.")
         .sample(numberOr(result, "n", 0));
     if (result.contains("validation_rms_mm"))
-      e.family("robocal_validation_rms_mm", "gauge",
-               "The latest fit's residual RMS on samples it did not fit, mm.")
-          .sample(numberOr(result, "validation_rms_mm", NAN));
+      e.family("robocal_validation_rms_meters", "gauge",
+               "The latest fit's residual RMS on samples it did not fit, meters.")
+          .sample(kMetersPerMm * numberOr(result, "validation_rms_mm", NAN));
     const json wv = result.value("work_volume", json::object());
     if (wv.is_object() && wv.contains("predicted_position_error_mm"))
-      e.family("robocal_work_volume_error_mm", "gauge",
-               "Predicted RMS tool position error over the work volume, mm.")
-          .sample(numberOr(wv["predicted_position_error_mm"], "rms", NAN));
+      e.family("robocal_work_volume_error_meters", "gauge",
+               "Predicted RMS tool position error over the work volume, meters.")
+          .sample(kMetersPerMm * numberOr(wv["predicted_position_error_mm"], "rms", NAN));
   }
   return e.str();
 }

@@ -86,6 +86,7 @@ struct RunController::Impl {
       d.resumable_id = d.run_id = *id;
       d.state = RunState::kInterrupted;
       d.state_reason = "run " + *id + " was interrupted; resume continues it";
+      recoverProgress(dir, d);
     }
     // `result` after a restart serves the newest fit on disk, not "no fit yet".
     std::vector<std::string> unreadable;
@@ -105,6 +106,26 @@ struct RunController::Impl {
     for (const std::string& id : store.ids()) {
       const json st = store.open(id).state();
       d.runs.push_back({id, st.value("status", "?"), st.value("reason", "")});
+    }
+  }
+
+  // An interrupted run's progress as its files say, for STATUS before the resume (it showed 0
+  // of 0 points). Reading the samples cuts a row torn by the crash, with an event.
+  void recoverProgress(RunDir& dir, RunData& d) {
+    try {
+      const Plan plan = parsePlan(readTextFile(dir.file("plan.json")), dir.file("plan.json"));
+      const std::vector<Sample> samples = dir.loadSamples();
+      d.shells_total = static_cast<int>(plan.shells.size());
+      d.points_total = 0;
+      for (const auto& shell : plan.shells)
+        for (const auto& step : shell.steps) d.points_total += step.kind == StepKind::kPoint;
+      d.points_done = static_cast<int>(samples.size());
+      if (!samples.empty()) {
+        d.shell_number = samples.back().shell;
+        d.connection_name = connectionName({samples.back().ball_index, samples.back().chuck_index});
+      }
+    } catch (const std::exception& e) {
+      spdlog::warn("run {}: its progress cannot be read: {}", dir.id(), e.what());
     }
   }
 
@@ -191,6 +212,12 @@ struct RunController::Impl {
       stopped(dir, stop);
     } catch (const drivers::DriverError& e) {
       stopped(dir, {StopRun::kFault, e.what()});
+    } catch (const FormatError& e) {
+      // A run file that cannot be read (a garbled samples row, a damaged plan): a resume would
+      // stop here again until the file is put right.
+      stopped(dir, {StopRun::kFault, std::string("a run file cannot be read: ") + e.what()},
+              "the robot is stopped; resume cannot go on until that file is repaired (fix or "
+              "remove the line it names, docs/robocald.md), or abort the run");
     } catch (const std::exception& e) {
       stopped(dir, {StopRun::kFault, std::string("error: ") + e.what()});
     }
@@ -216,7 +243,9 @@ struct RunController::Impl {
     return false;
   }
 
-  void stopped(std::optional<RunDir>& dir, const StopRun& stop) {
+  // `way_on`: what gets the run going again, for the operator (a pause says it).
+  void stopped(std::optional<RunDir>& dir, const StopRun& stop,
+               const std::string& way_on = "the robot is stopped, resume continues") {
     cell_io->halt();
     ctx.setBarOffset(0);
     const bool aborted = stop.kind == StopRun::kAbort;
@@ -233,7 +262,7 @@ struct RunController::Impl {
     }
     spdlog::warn("run {}: {}", status, stop.reason);
     ctx.setState(aborted ? RunState::kAborted : RunState::kPaused,
-                 stop.reason + (aborted ? "" : "; the robot is stopped, resume continues"));
+                 stop.reason + (aborted ? "" : "; " + way_on));
   }
 
   // Aborting a paused or interrupted run: nothing moves, the run is closed for good.

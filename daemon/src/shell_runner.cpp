@@ -400,11 +400,11 @@ void ShellRunner::replanFrom(ShellPlan& shell, std::size_t from, const JointsDeg
   std::filesystem::create_directories(dir_.file("replans"));
   dir_.writeJson(file,
                  {{"shell", shell.shell}, {"from_step", from}, {"why", why}, {"steps", steps}});
-  dir_.logEvent({{"event", "replan"},
-                 {"shell", shell.shell},
-                 {"from_step", from},
-                 {"why", why},
-                 {"file", file}});
+  ctx_.event(dir_, {{"event", "replan"},  // to watchers too: /metrics counts it
+                    {"shell", shell.shell},
+                    {"from_step", from},
+                    {"why", why},
+                    {"file", file}});
 }
 
 void ShellRunner::measure(const ShellPlan& planned, int already, JointsDeg q) {

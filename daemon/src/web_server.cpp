@@ -99,10 +99,15 @@ void WebServer::accept() {
     if (ec == asio::error::operation_aborted) return;
     if (!ec) {
       if (http_open_ >= kMaxHttpConnections) {
-        ++counts_.refused;
+        if (counts_.http_refused++ % 100 == 0)
+          spdlog::warn(
+              "web port: {} HTTP connections open, the limit: refusing new ones until "
+              "some end (each within request_timeout_s); {} refused so far",
+              kMaxHttpConnections, counts_.http_refused);
         boost::system::error_code ignored;
         socket.close(ignored);
       } else {
+        configureClientSocket(socket, limits_.unsent_max_bytes);
         auto h = std::make_shared<Http>(std::move(socket));
         boost::system::error_code peer_ec;
         const auto remote = h->stream.socket().remote_endpoint(peer_ec);

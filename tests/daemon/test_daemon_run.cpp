@@ -396,6 +396,12 @@ TEST_CASE("a kill while a set is fitted: resume fits it again and the run ends w
   const json st = c->request({{"cmd", "status"}}, 10, "STATUS");
   CHECK(st["state"] == "interrupted");
   CHECK(st["run"] == run_id);
+  // Before the resume STATUS says how far the interrupted run got, from its files.
+  const auto measured = loadSamplesFile(cell.runDir(run_id) + "/samples.csv");
+  CHECK(st["points_done"] == measured.size());
+  CHECK(st["points_total"] ==
+        plannedPoints(loadPlanFile(cell.runDir(run_id) + "/plan.json")).size());
+  CHECK(st["shells"] == 3);
   REQUIRE(c->request({{"cmd", "resume"}, {"token", cell.daemon->token()}}, 30, "ACK")["class"] ==
           "ACK");
   REQUIRE(cell.operate(*c, {"done", "paused", "error"}, 120) == "done");

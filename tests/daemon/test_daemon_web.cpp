@@ -71,7 +71,12 @@ std::string get(unsigned short port, const std::string& target) {
 struct Browser {
   asio::io_context io;
   websocket::stream<tcp::socket> ws{io};
-  Browser(unsigned short port, const std::string& origin = {}) {
+  // `receive_buffer_bytes`: a small kernel buffer on this side (0: the kernel's), for a browser
+  // that stops reading to be seen as one soon.
+  Browser(unsigned short port, const std::string& origin = {}, int receive_buffer_bytes = 0) {
+    ws.next_layer().open(tcp::v4());
+    if (receive_buffer_bytes > 0)
+      ws.next_layer().set_option(asio::socket_base::receive_buffer_size(receive_buffer_bytes));
     ws.next_layer().connect({asio::ip::make_address("127.0.0.1"), port});
     const std::string host = "127.0.0.1:" + std::to_string(port);
     const std::string o = origin.empty() ? "http://" + host : origin;
@@ -171,6 +176,34 @@ TEST_CASE("web port: the WebSocket carries the TCP protocol; actions need the to
   CHECK(f.daemon->client()->request({{"cmd", "status"}})["clients"] == 2);
 }
 
+TEST_CASE("web port: a browser that stops reading is closed after client_stall_s, not 300 s",
+          "[web]") {
+  WebFixture f;
+  const unsigned short port = f.daemon->webPort();
+  Browser stuck(port, {}, 2048);
+  CHECK(stuck.read()["class"] == "VERSION");
+  stuck.send({{"cmd", "watch"}, {"enable", true}});  // 50 readings a second, and never read again
+  const auto started = std::chrono::steady_clock::now();
+  std::string metrics;
+  for (int i = 0; i < 60; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    metrics = get(port, "/metrics");
+    if (metrics.find("robocal_client_events_total{transport=\"web\",kind=\"stalled\"} 1") !=
+        std::string::npos)
+      break;
+  }
+  const double took_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  INFO(metrics);
+  CHECK_THAT(metrics,
+             Contains("robocal_client_events_total{transport=\"web\",kind=\"stalled\"} 1"));
+  // The kernel's buffers fill in seconds at 16 KiB unsent, then client_stall_s (5 s).
+  CHECK(took_s < 25);
+  // Another browser is served as before.
+  Browser fresh(port);
+  CHECK(fresh.read()["class"] == "VERSION");
+}
+
 TEST_CASE("web port: a foreign origin and browsers past max_browsers are refused", "[web]") {
   WebFixture f;
   const unsigned short port = f.daemon->webPort();
@@ -218,7 +251,7 @@ TEST_CASE("metrics: counters from the published objects, state and result as gau
                  Contains("robocal_run_state{state=\"idle\"} 0\n") &&
                  Contains("robocal_points_done 7\n") && Contains("robocal_samples_total 1\n") &&
                  Contains("robocal_bar_over_range_total 2\n") &&
-                 Contains("robocal_bar_deflection_mm -0.25\n") &&
+                 Contains("robocal_bar_deflection_meters -0.00025\n") &&
                  Contains("robocal_faults_total{kind=\"val_timeouts\"} 3\n") &&
                  Contains("robocal_run_stops_total{state=\"paused\"} 1\n") &&
                  Contains("robocal_events_total{event=\"recentre\"} 1\n") &&
@@ -227,11 +260,11 @@ TEST_CASE("metrics: counters from the published objects, state and result as gau
                  Contains("robocal_clients{transport=\"tcp\"} 2\n") &&
                  Contains("robocal_client_events_total{transport=\"tcp\",kind=\"refused\"} 1\n") &&
                  Contains("robocal_client_events_total{transport=\"web\",kind=\"refused\"} 4\n") &&
-                 Contains("robocal_fit_rms_mm 0.03\n") &&
-                 Contains("robocal_validation_rms_mm 0.04\n") &&
-                 Contains("robocal_work_volume_error_mm 0.02\n"));
+                 Contains("robocal_fit_rms_meters 3e-05\n") &&
+                 Contains("robocal_validation_rms_meters 4e-05\n") &&
+                 Contains("robocal_work_volume_error_meters 2e-05\n"));
   CHECK(text.find("shell\"}") == std::string::npos);  // "shell" of an event is not a fault
   // Before any fit: no fit gauges at all (not zeros, which would read as a perfect fit).
   const std::string before = m.text(status, {{"available", false}}, {});
-  CHECK(before.find("robocal_fit_rms_mm") == std::string::npos);
+  CHECK(before.find("robocal_fit_rms_meters") == std::string::npos);
 }

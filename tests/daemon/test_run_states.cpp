@@ -13,6 +13,7 @@
 
 #include <cmath>
 #include <condition_variable>
+#include <fstream>
 #include <mutex>
 #include <optional>
 #include <set>
@@ -52,6 +53,7 @@ class Harness {
   }
 
   daemon::RunController& run() { return *run_; }
+  std::string runDir(const std::string& id) const { return dir_.path.string() + "/runs/" + id; }
   ScriptedCell& cell() { return *cell_io_; }
   const Plan& plan() const { return plan_; }
   int points() const {
@@ -335,6 +337,33 @@ TEST_CASE("run states: a detach confirmed with the bar still on is caught by a s
   CHECK(h.problems().empty());
 }
 
+TEST_CASE(
+    "run states: a garbled samples row pauses a resume with the way on, not 'resume continues'",
+    "[daemon][states]") {
+  Harness h({"B1C1", "B2C2"}, {0});
+  int connects = 0;
+  h.at_prompt = [&](const json& p) {
+    if (p["action"] == "connect" && ++connects == 2) {  // after shell 1's points
+      h.expect(h.run().pause("break").empty(), "pause refused");
+      return false;
+    }
+    return true;
+  };
+  REQUIRE(h.run().start(h.plan()).empty());
+  REQUIRE(h.waitState({"paused", "done", "error"}) == "paused");
+  const std::string id = h.run().status().resumable;
+  { std::ofstream(h.runDir(id) + "/samples.csv", std::ios::app) << "1,not,a,row\n"; }
+  for (int resume = 0; resume < 2; ++resume) {  // and the same again: nothing moved meanwhile
+    REQUIRE(h.run().resume("").empty());
+    REQUIRE(h.waitState({"paused", "done", "error"}) == "paused");
+    const std::string reason = h.seen("STATE").back()["reason"];
+    CHECK_THAT(reason, Catch::Contains("samples.csv"));
+    CHECK_THAT(reason, Catch::Contains("resume cannot go on until that file is repaired"));
+    CHECK_THAT(reason, !Catch::Contains("resume continues"));
+  }
+  CHECK(h.problems().empty());
+}
+
 TEST_CASE("run states: two bar extensions make sets 1 and 2, the second predicted by the first",
           "[daemon][states]") {
   Harness h({"B1C1", "B2C2", "B3C3"}, {0, 100});
@@ -357,6 +386,7 @@ TEST_CASE("run states: a model error keeps the bar centred by corrective moves a
   REQUIRE(h.run().start(h.plan()).empty());
   REQUIRE(h.waitState({"done", "paused", "error"}, 120) == "done");
   CHECK_FALSE(h.events("recentre").empty());
+  CHECK_FALSE(h.events("replan").empty());  // published, so /metrics counts them
   CHECK(h.cell().worstDeflection() < 1.8);  // never past the hard limit
   CHECK(h.seen("SAMPLE").size() == static_cast<std::size_t>(h.points()));
   CHECK(h.problems().empty());

@@ -20,6 +20,12 @@
 
 namespace robocal::daemon {
 
+// Every client socket robocald accepts, TCP protocol and web port alike: lines go out as they
+// come (TCP_NODELAY), and the kernel holds at most `unsent_max_bytes` not yet sent
+// (TCP_NOTSENT_LOWAT), so that a client that stops reading shows as writes that make no progress
+// within seconds (the stall limit), not after megabytes of auto-tuned socket buffers.
+void configureClientSocket(boost::asio::ip::tcp::socket& socket, int unsent_max_bytes);
+
 struct HubLimits {
   int max_clients = 64;
   std::size_t max_line_bytes = 16 * 1024;
@@ -63,7 +69,6 @@ class ClientHub {
  private:
   struct Client;
   void accept();
-  void configureSocket(boost::asio::ip::tcp::socket& socket) const;
   void read(const std::shared_ptr<Client>& c);
   void enqueue(const std::shared_ptr<Client>& c, std::string line, bool droppable);
   void write(const std::shared_ptr<Client>& c);

@@ -38,12 +38,18 @@ struct WebLimits {
   // site that rebinds its name to this address is refused).
   std::vector<std::string> allowed_origins;
   std::size_t queue_max_bytes = 8 * 1024 * 1024;  // per browser, besides queue_max messages
+  // As the TCP clients' (HubLimits): without it a browser that stopped reading was closed only
+  // by the WebSocket's own 300 s timeout, its queue at megabytes, not after stall_s.
+  int unsent_max_bytes = 16 * 1024;
 };
 
 struct WebCounts {
   long refused = 0;        // over max_browsers, or a foreign origin
   long stalled = 0;        // closed as stuck
   long dropped_lines = 0;  // BAR readings not sent to slow browsers
+  // HTTP connections closed at once because kMaxHttpConnections (64) were open, requests
+  // unfinished (each is closed after request_timeout_s): page and /metrics alike.
+  long http_refused = 0;
 };
 
 class WebServer {
