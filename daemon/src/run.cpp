@@ -17,6 +17,7 @@
 #include <spdlog/spdlog.h>
 
 #include <cmath>
+#include <filesystem>
 #include <thread>
 
 namespace robocal::daemon {
@@ -303,45 +304,21 @@ struct RunController::Impl {
   }
 };
 
-RunController::RunController(DaemonConfig config, Model nominal, std::optional<CellConfig> cell,
-                             Publish publish, std::unique_ptr<CellIo> cell_io)
-    : impl_(std::make_unique<Impl>(std::move(config), std::move(nominal), std::move(cell),
-                                   std::move(publish), std::move(cell_io))) {}
-
-RunController::~RunController() = default;
-
-std::string RunController::start(const Plan& plan) {
-  return impl_->shared.with([&](RunData& d) -> std::string {
-    const char* state = proto::runStateName(d.state);
-    if (d.busy()) return std::string("a run is in progress (") + state + ")";
-    if (!d.resumable_id.empty() && d.state != RunState::kDone)
-      return "run " + d.resumable_id + " is " + state +
-             ": resume it or abort it before starting another";
-    // Refused before a run folder exists: a missing port leaves no empty run in the history.
-    if (!d.devices.bar_connected)
-      return "the ball-bar reader is not connected: " + d.devices.bar_error +
-             " (robocald retries every 2 s; `robocal probe --bar PORT` checks the port)";
-    if (!d.devices.val_connected)
-      return "the VAL II controller is not connected: " + d.devices.val_error +
-             " (robocald retries every 2 s; `robocal probe --val PORT` checks the port)";
-    d.job = RunJob{RunJob::kStart, plan, {}};
-    impl_->shared.wake();
-    return {};
-  });
-}
-
-std::string RunController::confirm(std::optional<int> shell) {
-  return impl_->shared.with([&](RunData& d) -> std::string {
-    if (!d.prompt) return "nothing to confirm: no prompt is pending";
-    if (shell && *shell != d.prompt_shell)
-      return "the pending prompt is for shell " + std::to_string(d.prompt_shell) + ", not " +
-             std::to_string(*shell);
-    ++d.confirms;
-    return {};
-  });
-}
-
 namespace {
+// "" when every configured device path exists; else which device's path is gone, and what to
+// check. Ports found by USB serial number or description (no path) are left to the drivers.
+std::string missingPort(const drivers::DriversConfig& drivers) {
+  const std::pair<const char*, const drivers::SerialConfig*> ports[] = {
+      {"the VAL II controller", &drivers.val.serial}, {"the ball-bar reader", &drivers.bar.serial}};
+  for (const auto& [device, serial] : ports) {
+    std::error_code ec;
+    if (!serial->path.empty() && !std::filesystem::exists(serial->path, ec))
+      return std::string(device) + "'s port " + serial->path +
+             " is gone (unplugged, or another name now?): `robocal ports` lists what is there";
+  }
+  return {};
+}
+
 // Why the bar looks seated on the ball ("" when it reads as it did off the robot): a reading
 // more than `threshold_mm` from the free bar's at the prompt, or a status line in its place.
 std::string barSeatedProblem(const RunData& d, double threshold_mm) {
@@ -365,6 +342,47 @@ std::string barSeatedProblem(const RunData& d, double threshold_mm) {
   return buf;
 }
 }  // namespace
+
+RunController::RunController(DaemonConfig config, Model nominal, std::optional<CellConfig> cell,
+                             Publish publish, std::unique_ptr<CellIo> cell_io)
+    : impl_(std::make_unique<Impl>(std::move(config), std::move(nominal), std::move(cell),
+                                   std::move(publish), std::move(cell_io))) {}
+
+RunController::~RunController() = default;
+
+std::string RunController::start(const Plan& plan) {
+  return impl_->shared.with([&](RunData& d) -> std::string {
+    const char* state = proto::runStateName(d.state);
+    if (d.busy()) return std::string("a run is in progress (") + state + ")";
+    if (!d.resumable_id.empty() && d.state != RunState::kDone)
+      return "run " + d.resumable_id + " is " + state +
+             ": resume it or abort it before starting another";
+    // Refused before a run folder exists: a missing port leaves no empty run in the history.
+    // A device path that is gone now (an adapter unplugged, a pty closed) is refused at once:
+    // the idle loop notices a lost port only at its next poll, after `start` was acknowledged.
+    if (const std::string gone = missingPort(impl_->config.drivers); !gone.empty()) return gone;
+    if (!d.devices.bar_connected)
+      return "the ball-bar reader is not connected: " + d.devices.bar_error +
+             " (robocald retries every 2 s; `robocal probe --bar PORT` checks the port)";
+    if (!d.devices.val_connected)
+      return "the VAL II controller is not connected: " + d.devices.val_error +
+             " (robocald retries every 2 s; `robocal probe --val PORT` checks the port)";
+    d.job = RunJob{RunJob::kStart, plan, {}};
+    impl_->shared.wake();
+    return {};
+  });
+}
+
+std::string RunController::confirm(std::optional<int> shell) {
+  return impl_->shared.with([&](RunData& d) -> std::string {
+    if (!d.prompt) return "nothing to confirm: no prompt is pending";
+    if (shell && *shell != d.prompt_shell)
+      return "the pending prompt is for shell " + std::to_string(d.prompt_shell) + ", not " +
+             std::to_string(*shell);
+    ++d.confirms;
+    return {};
+  });
+}
 
 std::string RunController::nudge(std::optional<int> shell, double mm) {
   return impl_->shared.with([&](RunData& d) -> std::string {

@@ -128,8 +128,17 @@ RunDir RunStore::create(const std::string& plan_text) {
 
 std::vector<std::string> RunStore::ids() const {
   std::vector<std::string> out;
-  for (const auto& entry : fs::directory_iterator(runs_dir_))
-    if (entry.is_directory()) out.push_back(entry.path().filename().string());
+  for (const auto& entry : fs::directory_iterator(runs_dir_)) {
+    if (!entry.is_directory()) continue;
+    // create() writes state.json last: a folder without it was cut short by a crash before the
+    // run began (nothing moved, nothing measured), and is no run to resume or list.
+    if (!fs::exists(entry.path() / kStateFile)) {
+      spdlog::warn("{}: an unfinished run folder (a crash while it was created): ignored",
+                   entry.path().string());
+      continue;
+    }
+    out.push_back(entry.path().filename().string());
+  }
   std::sort(out.begin(), out.end());
   return out;
 }

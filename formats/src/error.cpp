@@ -1,4 +1,5 @@
 #include <robocal/formats/error.hpp>
+#include <robocal/formats/file_ops_log.hpp>
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -70,6 +71,7 @@ void writeTextFileAtomic(const std::string& path, const std::string& text) {
     throw FormatError(path + ": cannot replace: " + std::strerror(err));
   }
   syncParentDir(path);
+  recordFileOp({FileOp::kReplace, path, text, 0});
 }
 
 void appendTextFileDurably(const std::string& path, const std::string& text) {
@@ -86,6 +88,7 @@ void appendTextFileDurably(const std::string& path, const std::string& text) {
   ::close(fd);
   if (!synced) throw FormatError(path + ": cannot flush to disk: " + std::strerror(errno));
   if (created) syncParentDir(path);
+  recordFileOp({FileOp::kAppend, path, text, 0});
 }
 
 std::size_t cutTornLastLine(const std::string& path) {
@@ -117,6 +120,7 @@ std::size_t cutTornLastLine(const std::string& path) {
   }
   if (::ftruncate(fd, keep) != 0 || ::fsync(fd) != 0)
     throw FormatError(path + ": cannot cut its torn last line: " + std::strerror(errno));
+  recordFileOp({FileOp::kTruncate, path, {}, static_cast<std::size_t>(keep)});
   return static_cast<std::size_t>(size - keep);
 }
 

@@ -166,6 +166,6 @@ TEST_CASE("a watcher that never reads changes nothing for the others") {
   while (std::chrono::steady_clock::now() < until)
     if (auto o = watcher->read(0.5); o && (*o)["class"] == "BAR") ++bars;
   CHECK(bars > 100);
-  CHECK(watcher->request({{"cmd", "status"}})["class"] == "STATUS");
+  CHECK(watcher->request({{"cmd", "status"}}, 10, "STATUS")["class"] == "STATUS");
   CHECK(f.daemon->running());
 }

@@ -276,17 +276,15 @@ TEST_CASE("start is refused with the port's error when a device is missing", "[e
   Cell cell({"B1C1"}, 25);
   cell.sim.reset();  // both ports are gone
   auto c = cell.daemon->client();
-  // The daemon notices at its next poll of the ports (every 2 s).
-  json reply;
-  for (int i = 0; i < 50; ++i) {
-    reply = c->request({{"cmd", "start"}, {"token", cell.daemon->token()}}, 30, "ACK");
-    if (reply["class"] == "ERROR") break;
-    c->request({{"cmd", "abort"}, {"token", cell.daemon->token()}}, 10, "ACK");
-    std::this_thread::sleep_for(std::chrono::milliseconds(200));
-  }
+  // At once, not after an ACK: the port's path is checked by `start` itself.
+  json reply = c->request({{"cmd", "start"}, {"token", cell.daemon->token()}}, 30, "ACK");
   INFO(reply.dump());
   REQUIRE(reply["class"] == "ERROR");
-  CHECK_THAT(reply["message"].get<std::string>(), Contains("not connected"));
+  CHECK_THAT(reply["message"].get<std::string>(), Contains("port"));
+  CHECK_THAT(reply["message"].get<std::string>(), Contains("is gone"));
+  // And again: nothing was started meanwhile.
+  reply = c->request({{"cmd", "start"}, {"token", cell.daemon->token()}}, 30, "ACK");
+  CHECK(reply["class"] == "ERROR");
   const json runs = c->request({{"cmd", "runs"}}, 10, "RUNS");
   CHECK(runs["runs"].empty());
 }
