@@ -278,6 +278,25 @@ RunContext::Moved RunContext::moveRecentring(const JointsDeg& target) {
   return {out.joints_deg, out.stopped ? past_soft : std::nullopt};
 }
 
+RunContext::Followed RunContext::moveWatchingForBar(const JointsDeg& target,
+                                                    std::optional<double> reference_mm,
+                                                    double wait_s) {
+  Followed f;
+  try {
+    f.joints_deg = move(target, false);
+  } catch (const DetachedBarMoved&) {
+    f.followed = true;
+    f.joints_deg = io.where();
+  }
+  forgetReading();
+  spin(wait_s, false);
+  const std::optional<double> now_mm = recentReadingMm();
+  f.over_range = last_reading_ && last_reading_->kind == drivers::BarLineKind::kOverRange;
+  f.change_mm = reference_mm && now_mm ? *now_mm - *reference_mm : 0;
+  f.followed = f.followed || f.over_range || std::abs(f.change_mm) > config.detached_change_mm;
+  return f;
+}
+
 RunContext::Measurement RunContext::measureHere(double window_s) {
   struct Collecting {  // also when a fault ends the window early: nothing collects while idle
     bool& flag;

@@ -106,6 +106,16 @@ class RunContext {
     std::optional<double> recentre_mm;  // the deflection that stopped it short
   };
   Moved moveRecentring(const JointsDeg& target);
+  // A move with the bar believed detached, then a fresh reading after `wait_s`: did the bar
+  // follow it (the move's own watch saw it, it ran over range, or the reading left `reference_mm`
+  // by more than detached_change_mm)? The detach probe and the creeping nudge ask this.
+  struct Followed {
+    JointsDeg joints_deg;  // where the robot stands
+    bool followed = false, over_range = false;
+    double change_mm = 0;  // the fresh reading minus `reference_mm` (0 when either is missing)
+  };
+  Followed moveWatchingForBar(const JointsDeg& target, std::optional<double> reference_mm,
+                              double wait_s);
 
   struct Measurement {
     JointsDeg joints_deg;

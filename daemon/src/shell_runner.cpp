@@ -177,30 +177,20 @@ void ShellRunner::detach(int shell_number, const std::string& message) {
     ctx_.event(dir_, {{"event", "detach_probe"}, {"shell", shell_number}, {"skipped", problem}});
     return;
   }
-  const std::optional<double> before_mm = ctx_.recentReadingMm();
-  bool followed = false;  // the move's own watch saw the bar follow it
-  try {
-    ctx_.move(*away, false);
-  } catch (const DetachedBarMoved&) {
-    followed = true;
-  }
-  ctx_.forgetReading();
-  ctx_.spin(std::max(0.3, 3 * ctx_.config.bar_window_s), false);
-  const auto& last = ctx_.lastReading();
-  const std::optional<double> after_mm = ctx_.recentReadingMm();
-  const bool over_range = last && last->kind == drivers::BarLineKind::kOverRange;
-  const double change_mm = before_mm && after_mm ? *after_mm - *before_mm : 0;
+  const RunContext::Followed f = ctx_.moveWatchingForBar(
+      *away, ctx_.recentReadingMm(), std::max(0.3, 3 * ctx_.config.bar_window_s));
   ctx_.event(dir_, {{"event", "detach_probe"},
                     {"shell", shell_number},
                     {"moved_mm", probe_mm},
-                    {"reading_change_mm", change_mm},
-                    {"over_range", over_range}});
-  if (!followed && !over_range && std::abs(change_mm) <= ctx_.config.detached_change_mm) return;
+                    {"reading_change_mm", f.change_mm},
+                    {"over_range", f.over_range}});
+  if (!f.followed) return;
   BarAttachment doubt = was;
   doubt.maybe_attached = true;
   ctx_.setAttachment(doubt);  // the resume asks to detach it again
   char buf[160];
-  std::snprintf(buf, sizeof buf, over_range ? "went over range" : "changed by %+.3f mm", change_mm);
+  std::snprintf(buf, sizeof buf, f.over_range ? "went over range" : "changed by %+.3f mm",
+                f.change_mm);
   throw StopRun{StopRun::kFault,
                 "the ball-bar reading " + std::string(buf) + " when the ball moved " +
                     std::to_string(probe_mm).substr(0, 4) + " mm away from chuck " +
@@ -217,27 +207,16 @@ JointsDeg ShellRunner::nudge(const ShellPlan& shell, JointsDeg q, double mm) {
   const std::optional<double> free_mm = ctx_.recentReadingMm();
   const int steps = std::max(1, static_cast<int>(std::ceil(std::abs(mm) / threshold_mm)));
   for (int k = 1; k <= steps; ++k) {
-    bool followed = false;  // the move's own watch saw the bar follow
-    try {
-      q = ctx_.move(corrected(shell, q, -mm / steps), false);
-    } catch (const DetachedBarMoved&) {
-      followed = true;
-      q = ctx_.io.where();
-    }
-    ctx_.forgetReading();
-    ctx_.spin(std::max(0.1, ctx_.config.bar_window_s), false);
-    const auto& last = ctx_.lastReading();
-    const std::optional<double> now_mm = ctx_.recentReadingMm();
-    const bool over_range = last && last->kind == drivers::BarLineKind::kOverRange;
-    const double change_mm = free_mm && now_mm ? *now_mm - *free_mm : 0;
-    if (!followed && !over_range && std::abs(change_mm) <= threshold_mm) continue;
-    const double moved_mm = mm * k / steps;
+    const RunContext::Followed f = ctx_.moveWatchingForBar(
+        corrected(shell, q, -mm / steps), free_mm, std::max(0.1, ctx_.config.bar_window_s));
+    q = f.joints_deg;
+    if (!f.followed) continue;
     ctx_.event(dir_, {{"event", "nudge_stopped"},
                       {"shell", shell.shell},
                       {"mm", mm},
-                      {"moved_mm", moved_mm},
-                      {"reading_change_mm", change_mm},
-                      {"over_range", over_range},
+                      {"moved_mm", mm * k / steps},
+                      {"reading_change_mm", f.change_mm},
+                      {"over_range", f.over_range},
                       {"reason",
                        "the bar follows the ball: it is seated. Confirm if it is "
                        "seated where it should be; take it off the ball to nudge"}});
