@@ -128,7 +128,7 @@ TEST_CASE("a bar in the wrong chuck or on a neighbouring ball that happens to fi
   };
   for (const Case& k : {Case{"wrong chuck", "connect B1C2 bar_mm=here", "chuck"},
                         Case{"neighbouring ball", "connect B2C1 bar_mm=here", "across the bar"}}) {
-    for (const double time_scale : {1.0, 100.0}) {
+    for (const double time_scale : testTimeScales()) {
       DYNAMIC_SECTION(k.what << ", time scale " << time_scale) {
         Cell cell({"B1C1", "B2C2"}, 22, true, 180, time_scale);
         cell.mistake = [&](proto::Client& c, const json& p) {
@@ -199,7 +199,7 @@ TEST_CASE("a bar left attached by an aborted run is detached before the next run
 TEST_CASE("a bar still on the robot after a detach confirm stops the robot", "[e2e][safety]") {
   // The robot's speed does not matter: the first step after a detach is half a millimetre. At
   // real time (1) and 100 times faster; shells of six points, so that real time stays short.
-  for (const double time_scale : {1.0, 100.0}) {
+  for (const double time_scale : testTimeScales()) {
     DYNAMIC_SECTION("time scale " << time_scale) {
       Cell cell({"B1C1", "B2C2"}, 24, true, 180, time_scale);
       cell.mistake = [&](proto::Client& c, const json& p) {
@@ -229,7 +229,7 @@ TEST_CASE("a bar still on the robot after a detach confirm stops the robot", "[e
 }
 
 TEST_CASE("a nudge asked for with the bar seated does not stretch it", "[e2e][safety]") {
-  for (const double time_scale : {1.0, 100.0}) {
+  for (const double time_scale : testTimeScales()) {
     DYNAMIC_SECTION("time scale " << time_scale) {
       Cell cell({"B1C1", "B2C2"}, 26, true, 180, time_scale);
       std::vector<json> answers;  // what the daemon said to the nudge
