@@ -338,6 +338,54 @@ TEST_CASE("a shell that starts legally off zero does not pause the run", "[shell
   CHECK_THAT(problem, Contains("reading spread"));
 }
 
+TEST_CASE("recorded spreads: an ordinary run never pauses, a loose ball within 5 points",
+          "[shellwatch]") {
+  // The readings' spread (mm) at each point of scripts/pause-seeds.sh's runs (0.06 mm of bar
+  // noise, three readings a window): seed 7's nine shells, which must not pause ...
+  const std::vector<std::vector<double>> ordinary = {
+      {0.0623, 0.2138, 0.0964, 0.1304, 0.2591, 0.0622, 0.1710, 0.1971, 0.1179, 0.1402, 0.0967,
+       0.0899},
+      {0.0777, 0.1901, 0.0938, 0.0225, 0.0615, 0.0633, 0.1661, 0.1524, 0.0898, 0.0664, 0.1918,
+       0.2013},
+      {0.2828, 0.1133, 0.0559, 0.0930, 0.0397, 0.1152, 0.1511, 0.0854, 0.0758, 0.2458, 0.0386,
+       0.0149},
+      {0.1157, 0.1137, 0.0270, 0.1185, 0.1015, 0.1491, 0.0463, 0.1074, 0.0746, 0.0341, 0.0572,
+       0.1261},
+      {0.0886, 0.0606, 0.0475, 0.1300, 0.1893, 0.1483, 0.1215, 0.0809, 0.0550, 0.0502, 0.1449,
+       0.0155},
+      {0.0171, 0.1031, 0.1673, 0.0256, 0.1196, 0.0892, 0.2455, 0.0934, 0.0367, 0.0495, 0.0427,
+       0.1580},
+      {0.0692, 0.1920, 0.0352, 0.0574, 0.0827, 0.2485, 0.1364, 0.0767, 0.0458, 0.1394, 0.1523,
+       0.1438},
+      {0.0965, 0.1012, 0.0862, 0.0500, 0.0571, 0.0649, 0.0771, 0.0336, 0.1600, 0.0630, 0.1923,
+       0.1355},
+      {0.0877, 0.1463, 0.1133, 0.0931, 0.1305, 0.1771, 0.0240, 0.0585, 0.0916, 0.0289, 0.0822,
+       0.1437}};
+  daemon::ShellWatch w(1.0);
+  for (const auto& shell : ordinary) {
+    w.startShell();
+    for (double spread : shell) CHECK(w.point(0.1, spread).empty());
+  }
+  // ... and the loose-ball run: shell 1, then shell 2 whose ball works loose after its third
+  // point (a play of 0.25 mm, 1 sigma). It did not pause at 5x the earlier spread.
+  daemon::ShellWatch loose(1.0);
+  loose.startShell();
+  for (double spread : {0.1399, 0.0568, 0.0455, 0.1261, 0.0479, 0.1299, 0.1969, 0.1197, 0.0490,
+                        0.1682, 0.0680, 0.1566})
+    CHECK(loose.point(0.1, spread).empty());
+  loose.startShell();
+  int point = 0;
+  std::string problem;
+  for (double spread : {0.0265, 0.1901, 0.0803, 0.4123, 0.3182, 0.1565, 0.5562, 0.4085, 0.4967,
+                        0.6785, 0.2991, 0.6385}) {
+    ++point;
+    problem = loose.point(0.1, spread);
+    if (!problem.empty()) break;
+  }
+  CHECK_THAT(problem, Contains("reading spread"));
+  CHECK(point - 3 <= 5);
+}
+
 TEST_CASE("a ball working loose mid-shell pauses the run", "[e2e][shellwatch]") {
   Cell cell({"B1C1", "B2C2", "B3C3"}, 27, true, 45);
   auto c = cell.daemon->client();
