@@ -1,4 +1,5 @@
 #include <robocal/solver/assessment.hpp>
+#include <robocal/solver/verdict.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -9,12 +10,6 @@
 
 namespace robocal {
 namespace {
-
-std::string number(const char* format, double value) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, format, value);
-  return buf;
-}
 
 std::vector<Connection> connectionsOf(const std::vector<Sample>& samples) {
   std::vector<Connection> out;
@@ -41,31 +36,6 @@ std::vector<ParameterRow> parameterTable(const Model& nominal, const SolveResult
     rows.push_back(row);
   }
   return rows;
-}
-
-// The problems that make the calibrated model unfit to replace the nominal.
-std::vector<std::string> problemsOf(const FitAssessment& a) {
-  std::vector<std::string> out;
-  const Identifiability& id = a.fit.identifiability;
-  if (id.rank < id.expected) {
-    const auto& cs = a.connections;
-    out.push_back("rank " + std::to_string(id.rank) + " of the " + std::to_string(id.expected) +
-                  " independent parameters: these " + std::to_string(a.samples.size()) +
-                  " samples on " + std::to_string(cs.size()) + " of the 9 connections (" +
-                  connectionList(cs) + ") leave " + std::to_string(id.expected - id.rank) +
-                  " of them unidentified, held at nominal, so the model is only partly "
-                  "calibrated; measure all nine connections, or six that use every ball and "
-                  "every chuck, on enough points (docs/identifiability.md)");
-  }
-  const double nominal_mm = a.fit.before.rms_mm;
-  if (!(a.predicted_ball_error_rms_mm <= nominal_mm))
-    out.push_back("the predicted 1-sigma ball-position error, RMS " +
-                  number("%.4g", a.predicted_ball_error_rms_mm) +
-                  " mm, exceeds the nominal model's error on these samples (RMS residual " +
-                  number("%.4g", nominal_mm) +
-                  " mm): the data cannot pin the parameters, so the calibrated model could be "
-                  "less accurate than the nominal; measure more points");
-  return out;
 }
 
 double median(std::vector<double> v) {
@@ -146,7 +116,7 @@ FitAssessment assessFit(const Model& nominal, std::vector<Sample> samples,
   a.parameters = parameterTable(nominal, a.fit);
   a.shells = shellTable(a.samples, a.fit.residuals);
   a.connections = connectionsOf(a.samples);
-  a.problems = problemsOf(a);
+  a.problems = fitProblems(a, options.verdict);
 
   if (options.validation) {
     const HeldOutSamples& held = *options.validation;

@@ -20,8 +20,10 @@ struct RunResult {
   std::string output;  // stdout and stderr
 };
 
-inline RunResult runRobocal(const std::string& args) {
-  const std::string cmd = binDir() + "/robocal " + args + " 2>&1";
+// `stderr_too`: the output has stderr after stdout's lines (false: stdout alone, e.g. a --json
+// object followed by the problems a failing command lists on stderr).
+inline RunResult runRobocal(const std::string& args, bool stderr_too = true) {
+  const std::string cmd = binDir() + "/robocal " + args + (stderr_too ? " 2>&1" : " 2>/dev/null");
   RunResult r;
   FILE* pipe = ::popen(cmd.c_str(), "r");
   if (!pipe) return r;

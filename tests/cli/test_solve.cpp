@@ -101,12 +101,16 @@ TEST_CASE("robocal solve names an outlier by file and line, and drops it only wh
   text.replace(comma + 1, end - comma - 1, std::to_string(length + 2.0));
   std::ofstream(dir / "s.csv") << text;
 
-  auto r = runRobocal("solve --model " + kModel + " " + (dir / "s.csv") + " --json");
-  REQUIRE(r.exit_code == 0);
+  // Kept, the outlier makes the fit unusable (exit 3), and the problem names it and the fix.
+  auto r = runRobocal("solve --model " + kModel + " " + (dir / "s.csv") + " --json", false);
+  REQUIRE(r.exit_code == 3);
   auto j = nlohmann::json::parse(r.output);
   REQUIRE(j["outliers"].size() >= 1);
   CHECK(j["outliers"][0]["line"] == 40);
   CHECK(j["dropped"] == 0);
+  REQUIRE(j["problems"].size() == 1);
+  CHECK_THAT(j["problems"][0].get<std::string>(),
+             Contains("kept in the fit") && Contains("s.csv:40") && Contains("--drop-outliers"));
   const double rms_kept = j["rms_mm"];
   r = runRobocal("solve --model " + kModel + " " + (dir / "s.csv") + " --drop-outliers --json");
   REQUIRE(r.exit_code == 0);
@@ -203,9 +207,11 @@ TEST_CASE("robocal solve names a bad shell among good ones") {
     out << line << "\n";
   }
   std::ofstream(dir / "s.csv") << out.str();
-  const auto r = runRobocal("solve --model " + kModel + " " + (dir / "s.csv") + " --json");
-  REQUIRE(r.exit_code == 0);
+  const auto r = runRobocal("solve --model " + kModel + " " + (dir / "s.csv") + " --json", false);
   const auto j = nlohmann::json::parse(r.output);
+  INFO(j["problems"].dump());
+  CHECK(r.exit_code == 3);  // the noisy shell's worst points are outliers, kept
+  CHECK(j["problems"].size() == 1);
   CHECK(j["worst_shells"][0] == 4);
   for (const auto& shell : j["shells"]) CHECK(shell["stands_out"] == (shell["shell"] == 4));
 }

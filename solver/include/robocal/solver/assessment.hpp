@@ -13,6 +13,7 @@
 #include <robocal/kinematics/model.hpp>
 #include <robocal/kinematics/sample.hpp>
 #include <robocal/solver/calibrate.hpp>
+#include <robocal/solver/verdict.hpp>
 
 #include <optional>
 #include <string>
@@ -36,6 +37,7 @@ struct AssessOptions {
   bool drop_outliers = false;   // and, when set, dropped before a second fit
   std::optional<HeldOutSamples> validation;
   std::optional<Model> truth;  // a simulation's true robot
+  VerdictLimits verdict;       // what makes the fit unusable (verdict.hpp)
 };
 
 // One of the 54 parameters, in interface units: mm, deg, or a unitless gain (paramName and

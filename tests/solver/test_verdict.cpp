@@ -1,0 +1,91 @@
+// The verdict on a fit (verdict.hpp): each rule fires on the data that should fail it, with the
+// cause and the fix in words, and stays quiet on an ordinary calibration.
+#include <catch2/catch.hpp>
+
+#include <robocal/kinematics/puma560.hpp>
+#include <robocal/solver/assessment.hpp>
+#include <robocal/solver/verdict.hpp>
+
+#include "fit_fixtures.hpp"
+
+#include <algorithm>
+
+using namespace robocal;
+using namespace robocal::test;
+
+namespace {
+
+bool anyContains(const std::vector<std::string>& problems, const std::string& text) {
+  return std::any_of(problems.begin(), problems.end(),
+                     [&](const std::string& p) { return p.find(text) != std::string::npos; });
+}
+
+}  // namespace
+
+TEST_CASE("verdict: an ordinary calibration has no problems; each bad input has its own") {
+  const Model nominal = puma560NominalModel();
+  const Model truth = perturbed(1.0, 81);
+  std::vector<Sample> samples = measure(truth, planShells(nominal, "all", 0, 30, 82), 0.084, 83);
+  for (size_t i = 0; i < samples.size(); ++i) {
+    samples[i].source = "samples.csv";
+    samples[i].source_line = static_cast<int>(i) + 2;
+  }
+  REQUIRE(assessFit(nominal, samples).problems.empty());
+
+  SECTION("joints in radians") {
+    for (Sample& s : samples) s.joints_deg *= M_PI / 180;
+    const FitAssessment a = assessFit(nominal, samples);
+    REQUIRE_FALSE(a.problems.empty());
+    CHECK_THAT(a.problems[0], Catch::Contains("as if in radians") &&
+                                  Catch::Contains("samples.csv:2") && Catch::Contains("57.2958"));
+    CHECK(anyContains(a.problems, "far above a ball-bar's noise"));
+  }
+  SECTION("lengths in metres") {
+    for (Sample& s : samples) s.length_mm *= 1e-3;
+    const FitAssessment a = assessFit(nominal, samples);
+    REQUIRE_FALSE(a.problems.empty());
+    CHECK_THAT(a.problems[0], Catch::Contains("as if in metres") && Catch::Contains("x 1000"));
+  }
+  SECTION("gross outliers kept, then dropped") {
+    samples[40].length_mm += 2.0;
+    samples[200].length_mm += 25.0;
+    AssessOptions options;
+    FitAssessment a = assessFit(nominal, samples, options);
+    CHECK(a.outliers.size() >= 2);
+    CHECK(anyContains(a.problems, "kept in the fit (the worst +2"));
+    CHECK(anyContains(a.problems, "samples.csv:202"));
+    options.drop_outliers = true;
+    a = assessFit(nominal, samples, options);
+    CHECK(a.outliers_dropped);
+    CHECK(a.problems.empty());
+  }
+  SECTION("noise far above a ball-bar's") {
+    const auto noisy = measure(truth, planShells(nominal, "all", 0, 30, 82), 1.0, 84);
+    CHECK(anyContains(assessFit(nominal, noisy).problems, "far above a ball-bar's noise"));
+  }
+}
+
+TEST_CASE("verdict: as many points as parameters fit anything and are refused") {
+  const Model nominal = puma560NominalModel();
+  const Model truth = perturbed(1.0, 85);
+  // Five points a connection: 45 samples for 36 parameters, 9 degrees of freedom.
+  const auto few = measure(truth, planShells(nominal, "all", 0, 5, 86), 0.084, 87);
+  const FitAssessment a = assessFit(nominal, few);
+  CHECK(anyContains(a.problems, "degrees of freedom"));
+  CHECK(anyContains(a.problems, "measure at least " +
+                                    std::to_string(2 * a.fit.identifiability.rank) + " points"));
+  // Eight a connection: 72, twice the parameters, is enough redundancy for the rule.
+  const auto enough = measure(truth, planShells(nominal, "all", 0, 8, 86), 0.084, 87);
+  CHECK_FALSE(anyContains(assessFit(nominal, enough).problems, "degrees of freedom"));
+}
+
+TEST_CASE("verdict: units are judged from the data, not guessed from a few samples") {
+  const Model nominal = puma560NominalModel();
+  const auto samples = measure(nominal, planShells(nominal, "B1C1", 0, 30, 88), 0.0, 89);
+  CHECK_FALSE(samplesUnitsProblem(nominal, samples));
+  std::vector<Sample> radians(samples.begin(), samples.begin() + 9);
+  for (Sample& s : radians) s.joints_deg *= M_PI / 180;
+  CHECK_FALSE(samplesUnitsProblem(nominal, radians));  // 9 samples: too few to judge
+  radians.push_back(radians.back());
+  CHECK(samplesUnitsProblem(nominal, radians));
+}
