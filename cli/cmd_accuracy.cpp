@@ -1,6 +1,7 @@
 // robocal accuracy: how accurate the robot is where the user works, before and after
 // compensation (compensation/accuracy.hpp, docs/compensation.md).
 #include "args.hpp"
+#include "model_args.hpp"
 
 #include <robocal/compensation/accuracy_report.hpp>
 #include <robocal/compensation/targets.hpp>
@@ -13,7 +14,7 @@ namespace robocal::cli {
 namespace {
 
 constexpr const char* kHelp =
-    R"(usage: robocal accuracy --nominal NOMINAL --calibrated CALIBRATED [--truth TRUE]
+    R"(usage: robocal accuracy --calibrated CALIBRATED [--nominal NOMINAL] [--truth TRUE]
                         [--cell cell.json | --poses FILE] [--tool x,y,z,rz,ry,rx]
                         [--json] [--svg FILE]
 
@@ -23,8 +24,9 @@ error of the true robot commanded with the nominal joints and with the compensat
 (RMS, p95, max). The poses are the cell file's work_volume (docs/compensation.md; without
 --cell and --poses, the reference cell's) or a targets file (robocal compensate's forms).
 
-  --nominal FILE        the controller's model                                    required
   --calibrated FILE     the calibrated model                                      required
+  --nominal FILE        the controller's model: only a check, refused when it differs from
+                        the one recorded in CALIBRATED   [the recorded one, else the PUMA 560]
   --truth FILE          a simulation's true model (robocal simulate --truth-out)
   --cell FILE           cell file: its work_volume section
   --poses FILE          targets CSV instead of the work volume
@@ -42,8 +44,8 @@ int run(const std::vector<std::string>& argv) {
     std::fputs(kHelp, stdout);
     return 0;
   }
-  const Model nominal = loadModelFile(args.required("nominal"));
   const Model calibrated = loadModelFile(args.required("calibrated"));
+  const Model nominal = nominalFor(args, calibrated, "accuracy", "calibrated");
   std::optional<Model> truth;
   if (args.has("truth")) truth = loadModelFile(args.get("truth", ""));
   if (args.has("cell") && args.has("poses")) throw UsageError("give --cell or --poses, not both");

@@ -1,10 +1,10 @@
 // robocal compensate: corrected joint readings for target poses or for a program's nominal joints,
 // with a calibrated model (compensation/, docs/compensation.md).
 #include "args.hpp"
+#include "model_args.hpp"
 
 #include <robocal/compensation/targets.hpp>
 #include <robocal/formats/model_json.hpp>
-#include <robocal/kinematics/puma560.hpp>
 
 #include <cstdio>
 
@@ -31,7 +31,8 @@ near_singularity rows carry joints.
   --model FILE          calibrated model (robocal solve --out, or robocald's)          required
   --targets FILE        targets CSV                                                     required
   --out FILE            output to write                                                 required
-  --nominal FILE        the controller's model                 [the PUMA 560 nominal of robocal]
+  --nominal FILE        the controller's model: only a check, refused when it differs from the
+                        nominal recorded in MODEL       [the recorded one, else the PUMA 560]
   --tool X,Y,Z,RZ,RY,RX tool centre point in the ball fixture's frame (mm, deg)       [0,...]
   --format F            csv: name,j1..j6,predicted_error_mm,status,config,note          [csv]
                         val2: one VAL II precision point #PPOINT(j1, ..., j6) per line
@@ -53,8 +54,7 @@ int run(const std::vector<std::string>& argv) {
   const Model calibrated = loadModelFile(args.required("model"));
   const std::string targets_path = args.required("targets");
   const std::string out_path = args.required("out");
-  const Model nominal =
-      args.has("nominal") ? loadModelFile(args.get("nominal", "")) : puma560NominalModel();
+  const Model nominal = nominalFor(args, calibrated, "compensate", "model");
   CompensationOptions options;
   if (args.has("tool")) {
     const auto tool = parsePoseText(args.get("tool", ""));
@@ -63,15 +63,6 @@ int run(const std::vector<std::string>& argv) {
   }
   const auto format = parseOutputFormat(args.get("format", "csv"));
   if (!format) throw UsageError("--format: expected csv, val2 or val2-move");
-  if (!args.has("nominal")) {
-    std::fprintf(stderr, "robocal compensate: nominal: the built-in %s (--nominal names yours)\n",
-                 nominal.name.c_str());
-    if (calibrated.provenance && calibrated.provenance->nominal_name != nominal.name)
-      std::fprintf(stderr,
-                   "robocal compensate: warning: %s was fitted from \"%s\", not from the "
-                   "built-in nominal: give --nominal\n",
-                   args.get("model", "").c_str(), calibrated.provenance->nominal_name.c_str());
-  }
   if (!calibrated.covariance)
     std::fprintf(stderr,
                  "robocal compensate: note: %s has no covariance: predicted_error_mm stays "

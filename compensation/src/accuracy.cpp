@@ -30,7 +30,7 @@ std::vector<std::pair<Eigen::Isometry3d, CompensatedTarget>> drawWorkVolume(
                        uniform(work.rx_range_deg[0], work.rx_range_deg[1]));
     // Reachable by the nominal model: the controller could be commanded there at all.
     const CompensatedTarget t = compensator.forPose(pose);
-    if (t.ok()) poses.push_back({pose, t});
+    if (t.solved()) poses.push_back({pose, t});
   }
   if (static_cast<int>(poses.size()) < work.poses)
     throw std::invalid_argument(
@@ -91,8 +91,9 @@ AccuracyReport assessAccuracy(const Compensator& compensator,
       a.calibrated_model =
           poseDifference(at_compensated, compensator.calibratedToolPose(a.target.joints_deg));
     }
-    if (a.target.ok()) {
-      ++r.ok;
+    if (a.target.ok()) ++r.ok;
+    if (a.target.solved()) {
+      ++r.solved;
       pred_pos.push_back(a.target.predicted_position_error_mm);
       pred_ori.push_back(a.target.predicted_orientation_error_deg);
       nom_pos.push_back(a.nominal_commanded.position_mm);

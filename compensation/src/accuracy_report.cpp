@@ -55,7 +55,8 @@ struct Panel {
 }  // namespace
 
 ojson accuracyJson(const AccuracyReport& r, bool per_pose) {
-  ojson out = {{"poses_from", r.poses_from}, {"poses", r.requested}, {"ok", r.ok}};
+  ojson out = {
+      {"poses_from", r.poses_from}, {"poses", r.requested}, {"ok", r.ok}, {"solved", r.solved}};
   if (r.predicted_position_mm.count) {
     out["predicted_position_error_mm"] = statsJson(r.predicted_position_mm);
     out["predicted_orientation_error_deg"] = statsJson(r.predicted_orientation_deg);
@@ -96,9 +97,13 @@ ojson accuracyJson(const AccuracyReport& r, bool per_pose) {
 }
 
 std::string accuracyText(const AccuracyReport& r) {
-  std::string out = "work-volume accuracy over " + std::to_string(r.ok) + " of " +
+  std::string out = "work-volume accuracy over " + std::to_string(r.solved) + " of " +
                     std::to_string(r.requested) + " target poses (" + r.poses_from + ")";
-  out += r.ok < r.requested ? "; the others could not be compensated (status not ok)\n" : "\n";
+  out += r.solved < r.requested ? "; the others could not be compensated\n" : "\n";
+  if (r.ok < r.solved)
+    out += "  " + std::to_string(r.solved - r.ok) +
+           " of them lie where the calibration says little (outside the joint ranges it "
+           "measured, or a predicted error above the correction): see the per-pose status\n";
   if (r.predicted_position_mm.count) {
     out += statsLine("predicted 1-sigma error, position:", r.predicted_position_mm, "mm", 4);
     out +=
@@ -137,7 +142,7 @@ std::string accuracySvg(const AccuracyReport& r) {
   }
   std::vector<const PoseAccuracy*> ok;
   for (const PoseAccuracy& p : r.poses)
-    if (p.target.ok()) ok.push_back(&p);
+    if (p.target.solved()) ok.push_back(&p);
   double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
   for (const PoseAccuracy* p : ok) {
     const Eigen::Vector3d t = p->target.target.translation();

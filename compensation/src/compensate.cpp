@@ -43,6 +43,10 @@ const char* compensationStatusName(CompensationStatus status) {
       return "near_singularity";
     case CompensationStatus::kOutsideLimits:
       return "outside_limits";
+    case CompensationStatus::kOutsideMeasured:
+      return "outside_measured";
+    case CompensationStatus::kNoGain:
+      return "no_gain";
   }
   return "unreachable";
 }
@@ -203,7 +207,36 @@ CompensatedTarget Compensator::solveCalibrated(CompensatedTarget t) const {
   }
   t.predicted_position_error_mm = predictedPositionError(t.joints_deg);
   t.predicted_orientation_error_deg = predictedOrientationError(t.joints_deg);
+  if (t.ok()) judgeCoverage(t);
   return t;
+}
+
+void Compensator::judgeCoverage(CompensatedTarget& t) const {
+  std::ostringstream why;
+  why.precision(4);
+  const auto& provenance = calibrated().provenance;
+  if (provenance && provenance->measured_joints_deg) {
+    for (int j = 0; j < kJointCount; ++j) {
+      const auto& [lo, hi] = (*provenance->measured_joints_deg)[j];
+      const double q = t.joints_deg[j];
+      if (q >= lo - options_.measured_margin_deg && q <= hi + options_.measured_margin_deg)
+        continue;
+      why << "joint " << j + 1 << " at " << q << " deg, outside the " << lo << " to " << hi
+          << " deg the calibration measured it over";
+      t.status = CompensationStatus::kOutsideMeasured;
+      t.reason = why.str();
+      return;
+    }
+  }
+  // Not compensating leaves the tool where the calibrated model puts the nominal readings.
+  const double correction_mm =
+      (calibratedToolPose(t.nominal_joints_deg).translation() - t.target.translation()).norm();
+  if (t.predicted_position_error_mm > correction_mm) {
+    why << "the predicted error, " << t.predicted_position_error_mm << " mm, exceeds the "
+        << correction_mm << " mm correction";
+    t.status = CompensationStatus::kNoGain;
+    t.reason = why.str();
+  }
 }
 
 }  // namespace robocal

@@ -75,10 +75,6 @@ std::string csvText(std::string text) {
   return text;
 }
 
-bool hasJoints(const CompensatedTarget& r) {
-  return r.status == CompensationStatus::kOk || r.status == CompensationStatus::kNearSingularity;
-}
-
 }  // namespace
 
 TargetFile parseTargets(const std::string& text, const std::string& source) {
@@ -155,7 +151,7 @@ std::string formatCompensated(const TargetFile& file, const std::vector<Compensa
   for (size_t i = 0; i < results.size(); ++i) {
     const CompensatedTarget& r = results[i];
     const std::string& name = file.targets[i].name;
-    const bool joints = hasJoints(r);
+    const bool joints = r.hasJoints();
     const std::string predicted =
         std::isnan(r.predicted_position_error_mm) ? "" : fixed(r.predicted_position_error_mm, 4);
     if (format == OutputFormat::kCsv) {

@@ -31,7 +31,7 @@ nlohmann::json compensateRequest(const ModelStore& models, const Model& nominal,
                                 r.reason,
                                 std::nullopt,
                                 std::nullopt};
-      if (r.status == CompensationStatus::kOk || r.status == CompensationStatus::kNearSingularity) {
+      if (r.hasJoints()) {
         std::array<double, 6> joints{};
         for (int j = 0; j < kJointCount; ++j) joints[j] = r.joints_deg[j];
         row.joints_deg = joints;

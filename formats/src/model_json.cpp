@@ -98,6 +98,33 @@ ModelProvenance provenanceFromJson(const Reader& r, const json& value) {
   p.expected_rank = static_cast<int>(r.optionalCount(value, where, "expected_rank", kParamCount));
   p.robocal_version = r.optionalString(value, where, "robocal_version", "");
   p.warnings = r.optionalStrings(value, where, "warnings");
+  if (const auto it = value.find("nominal_parameters"); it != value.end()) {
+    const std::string at = where + ".nominal_parameters";
+    r.object(*it, at);
+    ParamVector params;
+    for (int i = 0; i < kParamCount; ++i) {
+      const double v = r.number(*it, at, paramName(i).c_str());
+      params[i] = paramKind(i) == ParamKind::kAngle ? v / kDegPerRad : v;
+    }
+    for (const auto& [name, unused] : it->items())
+      if (paramIndexByName(name) < 0)
+        r.fail(at + "." + name, "is not a parameter of the model (L0.x ... J6.gain)");
+    p.nominal_params = params;
+  }
+  if (const auto it = value.find("measured_joints_deg"); it != value.end()) {
+    const std::string at = where + ".measured_joints_deg";
+    r.array(value, "measured_joints_deg", kJointCount);
+    std::array<std::array<double, 2>, kJointCount> ranges{};
+    for (int j = 0; j < kJointCount; ++j) {
+      const std::string item = at + "[" + std::to_string(j) + "]";
+      const json& pair = (*it)[j];
+      if (!pair.is_array() || pair.size() != 2 || !pair[0].is_number() || !pair[1].is_number() ||
+          pair[0].get<double>() > pair[1].get<double>())
+        r.fail(item, "expected [min, max] in deg with min <= max");
+      ranges[j] = {pair[0].get<double>(), pair[1].get<double>()};
+    }
+    p.measured_joints_deg = ranges;
+  }
   return p;
 }
 
@@ -114,6 +141,17 @@ nlohmann::ordered_json provenanceToJson(const ModelProvenance& p) {
   out["expected_rank"] = p.expected_rank;
   out["robocal_version"] = p.robocal_version;
   out["warnings"] = p.warnings;
+  if (p.nominal_params) {
+    ojson params = ojson::object();
+    for (int i = 0; i < kParamCount; ++i)
+      params[paramName(i)] = paramInterfaceValue(*p.nominal_params, i);
+    out["nominal_parameters"] = params;
+  }
+  if (p.measured_joints_deg) {
+    ojson ranges = ojson::array();
+    for (const auto& range : *p.measured_joints_deg) ranges.push_back({range[0], range[1]});
+    out["measured_joints_deg"] = ranges;
+  }
   return out;
 }
 

@@ -276,6 +276,17 @@ Model calibratedModel(const FitAssessment& fit, const FitOrigin& origin,
   p.run_id = origin.run_id;
   p.date_utc = dateUtc(made, "%Y-%m-%dT%H:%M:%SZ");
   p.nominal_name = fit.nominal.name;
+  p.nominal_params = toParams(fit.nominal);
+  if (!fit.samples.empty()) {
+    std::array<std::array<double, 2>, kJointCount> ranges;
+    for (int j = 0; j < kJointCount; ++j) ranges[j] = {1e300, -1e300};
+    for (const Sample& s : fit.samples)
+      for (int j = 0; j < kJointCount; ++j) {
+        ranges[j][0] = std::min(ranges[j][0], s.joints_deg[j]);
+        ranges[j][1] = std::max(ranges[j][1], s.joints_deg[j]);
+      }
+    p.measured_joints_deg = ranges;
+  }
   p.samples_files = origin.samples_files;
   p.samples = fit.samples.size();
   p.rms_mm = fit.fit.after.rms_mm;

@@ -3,6 +3,7 @@
 #include <robocal/kinematics/units.hpp>
 
 #include <cmath>
+#include <cstdio>
 
 namespace robocal {
 namespace {
@@ -83,6 +84,30 @@ ParamVector toParams(const Model& model) {
     p[i + 1] = model.joints[j].gain;
   }
   return p;
+}
+
+std::optional<Model> recordedNominal(const Model& calibrated) {
+  if (!calibrated.provenance || !calibrated.provenance->nominal_params) return std::nullopt;
+  Model nominal = withParams(calibrated, *calibrated.provenance->nominal_params);
+  nominal.name = calibrated.provenance->nominal_name;
+  nominal.provenance.reset();
+  return nominal;
+}
+
+std::optional<std::string> parameterDifference(const Model& here, const Model& there) {
+  const ParamVector a = toParams(here), b = toParams(there);
+  for (int i = 0; i < kParamCount; ++i) {
+    const double x = paramInterfaceValue(a, i), y = paramInterfaceValue(b, i);
+    if (std::abs(x - y) <= 1e-6) continue;
+    const std::string unit = paramUnit(i);
+    const auto value = [&](double v) {
+      char buf[48];
+      std::snprintf(buf, sizeof buf, "%.6g", v);
+      return std::string(buf) + (unit.empty() ? "" : " " + unit);
+    };
+    return paramName(i) + " is " + value(x) + " here, " + value(y) + " there";
+  }
+  return std::nullopt;
 }
 
 Model withParams(const Model& base, const ParamVector& p) {

@@ -98,3 +98,52 @@ TEST_CASE("[cli] robocal compensate and accuracy on a simulated calibration") {
     CHECK_FALSE(std::ifstream(dir / "never.csv").good());
   }
 }
+
+TEST_CASE("[cli] compensate and accuracy use the nominal the calibration started from") {
+  TempDir dir;
+  // A controller whose model is not robocal's built-in PUMA: link 2 half a millimetre longer.
+  nlohmann::json edited = nlohmann::json::parse(readFile(kModel));
+  edited["name"] = "our PUMA";
+  edited["links"][2]["x"] = edited["links"][2]["x"].get<double>() + 0.5;
+  writeFile(dir / "ours.json", edited.dump(2));
+  REQUIRE(runRobocal("simulate --model " + dir / "ours.json" +
+                     " --seed 4 --points-per-shell 30 --out " + dir / "s.csv")
+              .exit_code == 0);
+  REQUIRE(runRobocal("solve --model " + dir / "ours.json" + " " + dir / "s.csv" + " --out " +
+                     dir / "cal.json")
+              .exit_code == 0);
+  const auto cal = nlohmann::json::parse(readFile(dir / "cal.json"));
+  CHECK(cal["provenance"]["nominal_parameters"]["L2.x"] == edited["links"][2]["x"]);
+  // A program point where the calibration measured: the joints of a sample (columns j1..j6).
+  std::istringstream samples(readFile(dir / "s.csv"));
+  std::string row;
+  std::getline(samples, row);
+  std::getline(samples, row);
+  const auto fields = robocal::csv::splitFields(row);
+  std::string joints;
+  for (int j = 6; j < 12; ++j) joints += "," + std::string(fields[j]);
+  writeFile(dir / "program.csv",
+            "name,j1,j2,j3,j4,j5,j6\nmeasured" + joints + "\nelsewhere,10,-40,-160,5,30,0\n");
+  const std::string compensate =
+      "compensate --model " + dir / "cal.json" + " --targets " + dir / "program.csv";
+
+  // Joint 2 at -40 deg is far outside what the shells measured: written, with the status saying so.
+  RunResult r = runRobocal(compensate + " --out " + dir / "recorded.csv");
+  INFO(r.output);
+  CHECK(r.exit_code == 3);
+  CHECK_THAT(r.output, Contains("nominal: \"our PUMA\", the one") && Contains("1 ok, 1 not ok") &&
+                           Contains("elsewhere: outside_measured: joint 2 at -"));
+  r = runRobocal(compensate + " --nominal " + dir / "ours.json" + " --out " + dir / "same.csv");
+  CHECK(r.exit_code == 3);
+  CHECK(readFile(dir / "same.csv") == readFile(dir / "recorded.csv"));
+
+  r = runRobocal(compensate + " --nominal " + kModel + " --out " + dir / "never.csv");
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.output, Contains("is not the nominal") && Contains("L2.x is"));
+  CHECK_FALSE(std::ifstream(dir / "never.csv").good());
+  r = runRobocal("accuracy --calibrated " + dir / "cal.json" + " --nominal " + kModel);
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.output, Contains("L2.x is"));
+  r = runRobocal("accuracy --calibrated " + dir / "cal.json" + " --json");
+  CHECK(r.exit_code == 0);
+}

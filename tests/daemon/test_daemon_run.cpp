@@ -150,7 +150,10 @@ TEST_CASE("a full run to RESULT recovers the true robot", "[e2e]") {
     std::vector<double> before, after, predicted;
     for (size_t i = 0; i < program.size(); ++i) {
       const json& t = answer["targets"][i + 1];
-      REQUIRE(t["status"] == "ok");
+      INFO(t.dump());
+      // ok, or outside_measured: the program reaches past the joint ranges of these 6 shells
+      // (joint 2 to 62 deg, measured over 13-47 deg), still corrected, with the status saying so.
+      REQUIRE((t["status"] == "ok" || t["status"] == "outside_measured"));
       JointsDeg corrected;
       for (int j = 0; j < 6; ++j) corrected[j] = t["joints_deg"][j];
       const Eigen::Vector3d meant = nominal_kin.toolPose(program[i]).translation();

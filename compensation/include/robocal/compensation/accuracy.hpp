@@ -43,7 +43,10 @@ struct PoseAccuracy {
 struct AccuracyReport {
   std::string poses_from;  // "work volume of cell.json" or the poses file
   size_t requested = 0;    // targets given
-  size_t ok = 0;           // of which compensated with status ok (the statistics are over them)
+  size_t ok = 0;           // of which compensated with status ok
+  // ok, or solved where the calibration says little (outside_measured, no_gain): the statistics
+  // are over these, so a volume the calibration did not cover shows in them.
+  size_t solved = 0;
   std::vector<PoseAccuracy> poses;  // every target, in order
   ErrorStats predicted_position_mm, predicted_orientation_deg;
   bool has_truth = false;

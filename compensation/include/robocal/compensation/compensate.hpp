@@ -35,8 +35,15 @@ enum class CompensationStatus {
   kUnreachable,      // no configuration reaches the pose, or the solution did not converge
   kNearSingularity,  // solved, but within the singularity margins: small errors, large motions
   kOutsideLimits,    // solved, but no turn of some joint lies inside its limits
+  // Solved, but a joint lies outside the range the calibration measured it over (the model's
+  // provenance): the fit says little about the arm there.
+  kOutsideMeasured,
+  // Solved, but the calibrated model's predicted error there exceeds the correction it makes:
+  // compensating is not known to be better than not.
+  kNoGain,
 };
-// "ok", "unreachable", "near_singularity", "outside_limits": the files' and protocol's words.
+// "ok", "unreachable", "near_singularity", "outside_limits", "outside_measured", "no_gain": the
+// files' and protocol's words.
 const char* compensationStatusName(CompensationStatus status);
 
 struct CompensationOptions {
@@ -48,6 +55,8 @@ struct CompensationOptions {
   double wrist_singularity_deg = 2.0;
   double elbow_singularity_deg = 2.0;
   double shoulder_singularity_mm = 20.0;
+  // A joint this far outside the range the calibration measured it over is outside_measured.
+  double measured_margin_deg = 2.0;
 };
 
 struct CompensatedTarget {
@@ -64,6 +73,19 @@ struct CompensatedTarget {
   double position_residual_mm = 0;  // |calibrated tool pose - target| at joints_deg
   double angle_residual_deg = 0;
   bool ok() const { return status == CompensationStatus::kOk; }
+  // Reached in the calibrated model, inside the limits, away from singularities: ok, or ok but
+  // where the calibration says little (outside_measured, no_gain). Work volumes and accuracy
+  // figures are drawn from these, so that what the calibration did not cover shows in them.
+  bool solved() const {
+    return ok() || status == CompensationStatus::kOutsideMeasured ||
+           status == CompensationStatus::kNoGain;
+  }
+  // Whether the corrected readings are given: ok, and the statuses that warn
+  // (near_singularity, outside_measured, no_gain).
+  bool hasJoints() const {
+    return status == CompensationStatus::kOk || status == CompensationStatus::kNearSingularity ||
+           status == CompensationStatus::kOutsideMeasured || status == CompensationStatus::kNoGain;
+  }
 };
 
 class Compensator {
@@ -96,6 +118,9 @@ class Compensator {
 
  private:
   CompensatedTarget solveCalibrated(CompensatedTarget t) const;
+  // An ok target outside the calibration's measured joint ranges, or where its predicted error
+  // exceeds its correction, gets the status that says so.
+  void judgeCoverage(CompensatedTarget& t) const;
   // The status a solution gets from PumaIk's status and the singularity margins.
   CompensationStatus classify(const PumaIk& ik, const IkSolution& s, std::string& reason) const;
 

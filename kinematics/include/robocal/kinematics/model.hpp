@@ -56,6 +56,14 @@ struct ModelProvenance {
   int expected_rank = 0;    // independent parameters of the robot (36 for six revolute joints)
   std::string robocal_version;
   std::vector<std::string> warnings;  // the fit's problems, when the model was written despite them
+  // The starting model's 54 parameters (ParamVector units). The nominal is the calibrated model's
+  // names, limits and fixtures with these: recordedNominal gives it, so compensate and accuracy
+  // use the controller's model the calibration started from, and refuse another. Absent from
+  // files older than it.
+  std::optional<Eigen::Matrix<double, kParamCount, 1>> nominal_params;
+  // The range of each joint's readings over the fitted samples, {min, max} in deg: where the
+  // model was measured. Compensation flags targets outside it. Absent from older files.
+  std::optional<std::array<std::array<double, 2>, kJointCount>> measured_joints_deg;
 };
 
 struct Model {
@@ -102,6 +110,13 @@ ParamVector toParams(const Model& model);
 // A copy of `base` (names, limits, balls, chucks) with its 54 parameters replaced and no
 // covariance (it belongs to the parameters it came with).
 Model withParams(const Model& base, const ParamVector& params);
+
+// The nominal a calibrated model started from (its provenance's nominal_params), named as it was;
+// empty for a nominal model and for a calibrated file older than the record.
+std::optional<Model> recordedNominal(const Model& calibrated);
+// Where two models' 54 parameters differ by more than rounding (1e-6 mm, deg or gain), the first
+// such parameter in words ("L2.x is 431.8 mm here, 431.9 mm there"); empty when they agree.
+std::optional<std::string> parameterDifference(const Model& here, const Model& there);
 
 Eigen::Isometry3d linkTransform(const LinkParams& link);
 // Inverse of linkTransform: x, y, z, and ZYX Euler angles rz in (-180, 180], ry in [-90, 90].

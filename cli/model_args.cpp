@@ -1,0 +1,44 @@
+#include "model_args.hpp"
+
+#include <robocal/formats/model_json.hpp>
+#include <robocal/kinematics/puma560.hpp>
+
+#include <cstdio>
+
+namespace robocal::cli {
+
+Model nominalFor(const Args& args, const Model& calibrated, const char* command,
+                 const char* model_key) {
+  const std::string model_path = args.get(model_key, "");
+  const std::optional<Model> recorded = recordedNominal(calibrated);
+  if (args.has("nominal")) {
+    const std::string path = args.get("nominal", "");
+    Model given = loadModelFile(path);
+    if (recorded) {
+      if (const auto difference = parameterDifference(given, *recorded))
+        throw UsageError("--nominal " + path + " is not the nominal " + model_path +
+                         " was calibrated from (recorded in it): " + *difference +
+                         "; compensating against another nominal gives wrong joints. Leave "
+                         "--nominal out to use the recorded one");
+    }
+    return given;
+  }
+  if (recorded) {
+    std::fprintf(stderr, "robocal %s: nominal: \"%s\", the one %s was calibrated from\n", command,
+                 recorded->name.c_str(), model_path.c_str());
+    return *recorded;
+  }
+  Model builtin = puma560NominalModel();
+  std::fprintf(stderr,
+               "robocal %s: nominal: the built-in %s (%s does not record its nominal: a nominal "
+               "model, or one fitted before robocal recorded it; --nominal names yours)\n",
+               command, builtin.name.c_str(), model_path.c_str());
+  if (calibrated.provenance && calibrated.provenance->nominal_name != builtin.name)
+    std::fprintf(stderr,
+                 "robocal %s: warning: %s was fitted from \"%s\", not from the built-in nominal: "
+                 "give --nominal\n",
+                 command, model_path.c_str(), calibrated.provenance->nominal_name.c_str());
+  return builtin;
+}
+
+}  // namespace robocal::cli

@@ -1,0 +1,20 @@
+// The controller's nominal model for a command that compensates with a calibrated model
+// (compensate, accuracy): the nominal recorded in the calibrated model when --nominal is not
+// given; --nominal is then only a check, refused when it differs from the record, because
+// compensating against another nominal than the calibration's gives wrong joints with no sign.
+// A calibrated file older than the record falls back to --nominal, else the built-in PUMA 560,
+// with a note on stderr.
+#pragma once
+
+#include "args.hpp"
+
+#include <robocal/kinematics/model.hpp>
+
+namespace robocal::cli {
+
+// `command` names the subcommand in notes ("compensate"); `model_key` is the option naming the
+// calibrated model ("model", "calibrated"). Throws UsageError on a --nominal that differs.
+Model nominalFor(const Args& args, const Model& calibrated, const char* command,
+                 const char* model_key);
+
+}  // namespace robocal::cli
