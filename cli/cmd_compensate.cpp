@@ -25,8 +25,9 @@ The targets CSV (a header row; # comments) takes one of two forms, found by its 
   j1,j2,j3,j4,j5,j6                      a program's readings (deg) computed with the nominal
                                          model: each is moved to where the program meant it
 and an optional name column. Each output row keeps the nominal solution's arm configuration and
-joint turns; its status is ok, unreachable, near_singularity or outside_limits, and only ok and
-near_singularity rows carry joints.
+joint turns; its status is ok, near_singularity, outside_measured (a joint outside the range the
+calibration measured), no_gain (a predicted error above the correction), outside_limits or
+unreachable; the last two carry no joints (docs/compensation.md).
 
   --model FILE          calibrated model (robocal solve --out, or robocald's)          required
   --targets FILE        targets CSV                                                     required

@@ -238,7 +238,8 @@ struct Models {
 // `robocal compensate`'s CSV (docs/compensation.md); joints only when the status allows them.
 struct CompensatedRow {
   std::string name;
-  std::string status;  // ok, unreachable, near_singularity, outside_limits
+  std::string
+      status;  // ok, unreachable, near_singularity, outside_limits, outside_measured, no_gain
   std::string config;
   std::string note;
   std::optional<std::array<double, 6>> joints_deg;
