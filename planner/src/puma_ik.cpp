@@ -2,6 +2,8 @@
 
 #include <robocal/kinematics/units.hpp>
 
+#include <Eigen/Cholesky>
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -12,6 +14,10 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 // Closed-form quantities closer than this to a singularity make the configuration undefined.
 constexpr double kSingularEps = 1e-9;
+// A refinement that stops short of the target this close to the elbow's or the shoulder's
+// singularity may have found the edge of the arm's reach (refine()).
+constexpr double kBoundaryElbowDeg = 1.0;
+constexpr double kBoundaryShoulderMm = 5.0;
 // How far (deg) a link rotation of the model may be from the PUMA's alpha.
 constexpr double kAlphaToleranceDeg = 5.0;
 
@@ -205,27 +211,161 @@ IkSolution PumaIk::closedForm(const Eigen::Isometry3d& tool_pose, const ArmConfi
   return s;
 }
 
+// One damped least-squares (Levenberg-Marquardt) descent of the pose error from `seed`.
+struct PumaIk::Descent {
+  JointsDeg q = JointsDeg::Zero();
+  double cost = INFINITY;  // squared error, orientation weighed by orientation_scale_mm
+  bool converged = false;  // within the refinement's tolerances
+  int iterations = 0;      // Jacobians and refused steps
+};
+
+namespace {
+
+// The pose error of `q` as (mm, orientation_scale_mm * rad), and its two parts.
+struct PoseError {
+  Eigen::Matrix<double, 6, 1> e;
+  double position_mm = 0;
+  double angle_rad = 0;
+};
+
+PoseError poseError(const Kinematics& kin, const Eigen::Isometry3d& target, const JointsDeg& q,
+                    double orientation_scale_mm) {
+  const Eigen::Isometry3d pose = kin.toolPose(q);
+  PoseError out;
+  out.e.head<3>() = target.translation() - pose.translation();
+  const Eigen::AngleAxisd rot(target.linear() * pose.linear().transpose());
+  out.e.tail<3>() = rot.axis() * (rot.angle() * orientation_scale_mm);
+  out.position_mm = out.e.head<3>().norm();
+  out.angle_rad = std::abs(rot.angle());
+  return out;
+}
+
+}  // namespace
+
+PumaIk::Descent PumaIk::descend(const Eigen::Isometry3d& target, const ArmConfig* config,
+                                const JointsDeg& seed) const {
+  const IkOptions& opt = refine_options_;
+  Descent d;
+  d.q = seed;
+  PoseError err = poseError(kin_, target, d.q, opt.orientation_scale_mm);
+  if (!err.e.allFinite()) return d;
+  d.cost = err.e.squaredNorm();
+  // Damping relative to the largest diagonal of J^T J: a Gauss-Newton step while the steps
+  // lower the error (quadratic convergence near the solution), shorter and turned towards the
+  // gradient while they do not. No step is taken that raises the error, so that the descent
+  // cannot wander, and none longer than max_step_deg in a joint.
+  double mu = 1e-9;
+  while (d.iterations < opt.max_iterations) {
+    if (err.position_mm < opt.position_tol_mm && err.angle_rad < opt.angle_tol_rad) {
+      d.converged = true;
+      return d;
+    }
+    ++d.iterations;
+    JointJacobian jac = kin_.jointJacobian(d.q);
+    jac.bottomRows<3>() *= opt.orientation_scale_mm;
+    jac *= kRadPerDeg;  // per degree of reading
+    const Eigen::Matrix<double, 6, 6> jtj = jac.transpose() * jac;
+    const Eigen::Matrix<double, 6, 1> gradient = jac.transpose() * err.e;
+    const double scale = jtj.diagonal().maxCoeff();
+    // The requested configuration's region is kept once the descent is in it: a step that
+    // crosses a singularity into another configuration counts as a failed step.
+    const bool keep_config = config && configOf(d.q) == *config;
+    bool accepted = false;
+    while (!accepted && d.iterations <= opt.max_iterations) {
+      Eigen::Matrix<double, 6, 6> a = jtj;
+      a.diagonal().array() += mu * scale;
+      Eigen::Matrix<double, 6, 1> step = a.ldlt().solve(gradient);
+      const double largest = step.cwiseAbs().maxCoeff();
+      if (!(largest > 1e-13)) break;  // no step left: stationary (or a non-finite Jacobian)
+      if (largest > opt.max_step_deg) step *= opt.max_step_deg / largest;
+      const JointsDeg next = d.q + step;
+      const PoseError next_err = poseError(kin_, target, next, opt.orientation_scale_mm);
+      const double next_cost = next_err.e.squaredNorm();
+      if (next_err.e.allFinite() && next_cost < d.cost &&
+          (!keep_config || configOf(next) == *config)) {
+        d.q = next;
+        d.cost = next_cost;
+        err = next_err;
+        mu = std::max(mu * 0.1, 1e-12);
+        accepted = true;
+      } else {
+        mu *= 10;
+        ++d.iterations;
+        if (mu > 1e12) break;
+      }
+    }
+    if (!accepted) break;  // no step lowers the error: a stationary point (or the cap)
+  }
+  d.converged = err.position_mm < opt.position_tol_mm && err.angle_rad < opt.angle_tol_rad;
+  return d;
+}
+
+std::optional<JointsDeg> PumaIk::closedFormSeed(const Eigen::Isometry3d& target,
+                                                const ArmConfig& config,
+                                                const JointsDeg& near) const {
+  // The closed form is exact for the DH part of the model; for the rest, aim it at a target
+  // moved by the pose error its previous answer left (a fixed-point iteration that contracts
+  // as fast as the model is close to its DH arm).
+  Eigen::Isometry3d aim = target;
+  std::optional<JointsDeg> best;
+  double best_cost = INFINITY;
+  for (int k = 0; k < 6; ++k) {
+    const IkSolution cf = closedForm(aim, config, &near);
+    if (cf.status != IkStatus::kOk && cf.status != IkStatus::kOutsideLimits) break;
+    const Eigen::Isometry3d pose = kin_.toolPose(cf.joints_deg);
+    const double cost = poseError(kin_, target, cf.joints_deg, refine_options_.orientation_scale_mm)
+                            .e.squaredNorm();
+    if (!(cost < best_cost)) break;
+    best = cf.joints_deg;
+    best_cost = cost;
+    aim = aim * pose.inverse() * target;
+  }
+  return best;
+}
+
 IkSolution PumaIk::refine(const Eigen::Isometry3d& tool_pose, const ArmConfig& config,
                           const JointsDeg& seed) const {
   IkSolution s;
   s.config = config;
-  s.joints_deg = seed;
-  const auto q = solveIk(kin_, tool_pose, seed, refine_options_);
-  if (!q || !q->allFinite()) {
-    measureError(s, tool_pose);
-    s.status = IkStatus::kNoConvergence;
+  s.joints_deg = seed.allFinite() ? seed : JointsDeg::Zero();
+  if (!tool_pose.matrix().allFinite()) {
+    s.status = IkStatus::kUnreachable;
     return s;
   }
-  s.joints_deg = *q;
+  auto found = [&](const Descent& d) { return d.converged && configOf(d.q) == config; };
+  Descent d = descend(tool_pose, &config, s.joints_deg);
+  if (!found(d)) {
+    // From a seed across a singularity of this model (the elbow or the shoulder plane moved
+    // with the calibration), or too far for the descent: again from the closed form of this
+    // model's own geometry.
+    if (const auto cf = closedFormSeed(tool_pose, config, s.joints_deg)) {
+      const Descent again = descend(tool_pose, &config, *cf);
+      if (found(again) || again.cost < d.cost) d = again;
+    }
+  }
+  s.joints_deg = d.q.allFinite() ? d.q : s.joints_deg;
   measureError(s, tool_pose);
-  const SingularityMargins m = singularityMargins(*q);
+  if (!found(d)) {
+    // A descent that stops short of the target with the arm stretched straight (or the wrist
+    // centre on joint 1's axis plane) has found the nearest pose the configuration reaches: the
+    // target is out of its reach. Unless a descent free to change the configuration reaches it
+    // from there: then the target is in reach (near enough alike for all configurations of a
+    // PUMA-like arm) and the iteration failed. Anything else is a failure of the iteration.
+    const SingularityMargins m = singularityMargins(s.joints_deg);
+    const bool at_boundary =
+        !d.converged && d.q.allFinite() &&
+        (m.elbow_deg < kBoundaryElbowDeg || m.shoulder_mm < kBoundaryShoulderMm);
+    s.status = at_boundary && !descend(tool_pose, nullptr, d.q).converged
+                   ? IkStatus::kUnreachable
+                   : IkStatus::kNoConvergence;
+    return s;
+  }
+  const SingularityMargins m = singularityMargins(d.q);
   if (m.wrist_deg < kSingularEps * kDegPerRad || m.elbow_deg < kSingularEps * kDegPerRad ||
       m.shoulder_mm < kSingularEps) {
     s.status = IkStatus::kSingular;
-  } else if (!(configOf(*q) == config)) {
-    s.status = IkStatus::kNoConvergence;
   } else {
-    s.status = withinLimits(model_, *q) ? IkStatus::kOk : IkStatus::kOutsideLimits;
+    s.status = withinLimits(model_, d.q) ? IkStatus::kOk : IkStatus::kOutsideLimits;
   }
   return s;
 }

@@ -1,6 +1,7 @@
 // Inverse kinematics of a PUMA 560-like model: the closed form of the standard-DH arm (all eight
-// configurations), refined numerically with robocal::solveIk so that it also serves a calibrated
-// model whose links are not exactly the DH ones. No I/O.
+// configurations), refined numerically (Levenberg-Marquardt on the full model, with the
+// tolerances and step limit of robocal::IkOptions) so that it also serves a calibrated model
+// whose links are not exactly the DH ones. No I/O.
 //
 // The closed form works on the wrist-centre problem of the chain between L0 and L6:
 //   T06 = L0^-1 * T * L6^-1,  A_k = Rz(theta_k) * Tz(d_k) Tx(a_k) Rx(alpha_k)
@@ -39,10 +40,15 @@ std::optional<ArmConfig> parseArmConfig(const std::string& name);
 
 enum class IkStatus {
   kOk,
-  kUnreachable,  // the wrist centre is out of the arm's reach (or inside the shoulder offset)
+  // The wrist centre is out of the arm's reach (or inside the shoulder offset). refine(): the
+  // nearest pose the configuration reaches has the elbow straight or the wrist centre on the
+  // shoulder plane, and misses the target; joints_deg is that pose.
+  kUnreachable,
   kSingular,  // exactly at a wrist, elbow or shoulder singularity: the configuration is undefined
   kOutsideLimits,  // solved, but no 360-degree turn of a joint brings it inside the joint limits
-  kNoConvergence,  // the numerical refinement failed or left the requested configuration
+  // The numerical refinement found no solution in the requested configuration, though the
+  // target is not shown out of reach (not expected away from the singularities).
+  kNoConvergence,
 };
 const char* ikStatusName(IkStatus status);
 
@@ -81,7 +87,13 @@ class PumaIk {
   IkSolution solve(const Eigen::Isometry3d& tool_pose, const ArmConfig& config,
                    const JointsDeg* near = nullptr) const;
   // Numerical refinement only, from `seed` (cheap when the seed is close, e.g. a previous model's
-  // solution); checks the configuration and the limits like solve().
+  // solution); checks the configuration and the limits like solve(). The iteration never leaves
+  // `config` once in it; from a seed on the wrong side of one of this model's singularities, or
+  // one it does not converge from, it starts again from this model's closed form (iterated on
+  // the part of the model that is not DH). Converges on every reachable target of a calibrated
+  // model away from the singularities (tests/planner/test_ik_convergence.cpp: models up to three
+  // times as far from the nominal as a calibration finds them); a target out of this
+  // configuration's reach is kUnreachable.
   IkSolution refine(const Eigen::Isometry3d& tool_pose, const ArmConfig& config,
                     const JointsDeg& seed) const;
   // All eight configurations (solve() of each), in armConfigFromIndex order.
@@ -96,6 +108,15 @@ class PumaIk {
   // Picks the 360-degree turn of each reading; false when some joint fits no turn.
   bool wrapIntoLimits(JointsDeg& readings, const JointsDeg* near) const;
   void measureError(IkSolution& s, const Eigen::Isometry3d& target) const;
+  struct Descent;
+  // Levenberg-Marquardt on the full model's pose error from `seed`, keeping `config` (when
+  // given) once in it.
+  Descent descend(const Eigen::Isometry3d& target, const ArmConfig* config,
+                  const JointsDeg& seed) const;
+  // This model's closed form, iterated on the target it misses by: a seed in `config` close to
+  // the full model's answer; nullopt when the closed form has none.
+  std::optional<JointsDeg> closedFormSeed(const Eigen::Isometry3d& target, const ArmConfig& config,
+                                          const JointsDeg& near) const;
 
   Model model_;
   Kinematics kin_;
