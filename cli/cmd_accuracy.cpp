@@ -7,6 +7,7 @@
 #include <robocal/compensation/targets.hpp>
 #include <robocal/formats/model_json.hpp>
 #include <robocal/planner/cell_json.hpp>
+#include <robocal/sim/true_robot_json.hpp>
 
 #include <cstdio>
 
@@ -27,7 +28,8 @@ error of the true robot commanded with the nominal joints and with the compensat
   --calibrated FILE     the calibrated model                                      required
   --nominal FILE        the controller's model: only a check, refused when it differs from
                         the one recorded in CALIBRATED   [the recorded one, else the PUMA 560]
-  --truth FILE          a simulation's true model (robocal simulate --truth-out)
+  --truth FILE          a simulation's true robot (robocal simulate --truth-out); with its
+                        realism, judged warm, approaching in +, with its payload
   --cell FILE           cell file: its work_volume section
   --poses FILE          targets CSV instead of the work volume
   --tool X,Y,Z,RZ,RY,RX tool centre point in the ball fixture's frame (mm, deg)  [0,...]
@@ -46,8 +48,8 @@ int run(const std::vector<std::string>& argv) {
   }
   const Model calibrated = loadModelFile(args.required("calibrated"));
   const Model nominal = nominalFor(args, calibrated, "accuracy", "calibrated");
-  std::optional<Model> truth;
-  if (args.has("truth")) truth = loadModelFile(args.get("truth", ""));
+  std::optional<TrueRobot> truth;
+  if (args.has("truth")) truth = loadTruthFile(args.get("truth", ""));
   if (args.has("cell") && args.has("poses")) throw UsageError("give --cell or --poses, not both");
   CompensationOptions options;
   if (args.has("tool")) {

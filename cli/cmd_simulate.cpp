@@ -6,6 +6,12 @@
 #include <robocal/kinematics/kinematics.hpp>
 #include <robocal/planner/plan_json.hpp>
 #include <robocal/sim/measurements.hpp>
+#include <robocal/sim/true_robot_json.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
 
 #include <cstdio>
 
@@ -18,7 +24,13 @@ Simulates ball-bar measurements of a "true" robot: the nominal model with all 54
 perturbed (or a given truth), poses on each connection's shell found with the nominal model.
 
   --model FILE              nominal model (model format)                       required
-  --truth FILE              use this true robot instead of perturbing the nominal
+  --truth FILE              use this true robot (a truth file, with its realism) instead of
+                            perturbing the nominal
+  --realism R               what the true robot carries beside its geometry: ideal (exactly its
+                            model), typical (backlash, gravity compliance, warm-up, LVDT
+                            errors: docs/realism.md), or a JSON file of realism keys  [ideal,
+                            or the --truth file's]
+  --minutes-per-point M     robot time a point costs (the warm-up's clock)        [0.1]
   --seed N                  random seed for the truth, the poses and the noise  [1]
   --noise-mm S              Gaussian length noise, standard deviation           [0.084]
   --quantum-deg Q           joint-reading quantisation (0 = exact)              [0]
@@ -35,16 +47,55 @@ perturbed (or a given truth), poses on each connection's shell found with the no
                             simulator's own shells; excludes --connections, --bar-mm,
                             --extension-mm, --points-per-shell and --first-shell
   --out FILE                samples CSV to write                                [samples.csv]
-  --truth-out FILE          write the true model (model format)
+  --truth-out FILE          write the true robot (model format, plus its realism)
 )";
 
+// --realism: ideal, typical, or a file holding a JSON object of realism keys.
+Realism realismArg(const std::string& value) {
+  if (value == "ideal") return Realism::ideal();
+  if (value == "typical") return Realism::puma560Typical();
+  const std::string text = readTextFile(value);
+  nlohmann::json json;
+  try {
+    json = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::exception& e) {
+    throw FormatError(value + ": not valid JSON: " + e.what());
+  }
+  return realismFromJson(json, value);
+}
+
+// What the realism did to these samples, in one line: the largest compliance twist, the warm-up.
+std::string realismSummary(const TrueRobot& truth, const std::vector<Sample>& samples) {
+  double twist_deg = 0;
+  int joint = 0;
+  for (const Sample& s : samples) {
+    const auto torque =
+        truth.gravityTorqueNm(s.joints_deg, truth.realism.payload_kg, truth.realism.payload_com_mm);
+    for (int j = 0; j < kJointCount; ++j) {
+      const double t = std::abs(truth.realism.compliance_deg_per_nm[j] * torque[j]);
+      if (t > twist_deg) twist_deg = t, joint = j + 1;
+    }
+  }
+  char buf[320];
+  std::snprintf(
+      buf, sizeof buf,
+      "realism: backlash up to %.3g deg; gravity compliance up to %.3g deg (joint %d) "
+      "with a %.3g kg payload; warm-up %.3g K (tau %.3g min); LVDT gain error %.3g, "
+      "nonlinearity %.3g mm; bar length error %.3g",
+      *std::max_element(truth.realism.backlash_deg.begin(), truth.realism.backlash_deg.end()),
+      twist_deg, joint, truth.realism.payload_kg, truth.realism.warmup_k,
+      truth.realism.warmup_time_constant_min, truth.realism.lvdt_gain_error,
+      truth.realism.lvdt_nonlinearity_mm, truth.realism.bar_length_error);
+  return buf;
+}
+
 int run(const std::vector<std::string>& argv) {
-  const Args args(
-      argv,
-      {"model", "truth", "seed", "noise-mm", "quantum-deg", "connections", "bar-mm", "extension-mm",
-       "points-per-shell", "first-shell", "sigma-translation-mm", "sigma-link-angle-deg",
-       "sigma-offset-deg", "sigma-gain", "out", "truth-out", "plan"},
-      {"help"});
+  const Args args(argv,
+                  {"model", "truth", "seed", "noise-mm", "quantum-deg", "connections", "bar-mm",
+                   "extension-mm", "points-per-shell", "first-shell", "sigma-translation-mm",
+                   "sigma-link-angle-deg", "sigma-offset-deg", "sigma-gain", "out", "truth-out",
+                   "plan", "realism", "minutes-per-point"},
+                  {"help"});
   if (args.flag("help")) {
     std::fputs(kHelp, stdout);
     return 0;
@@ -58,8 +109,14 @@ int run(const std::vector<std::string>& argv) {
   sigmas.link_angle_deg = args.number("sigma-link-angle-deg", sigmas.link_angle_deg);
   sigmas.joint_offset_deg = args.number("sigma-offset-deg", sigmas.joint_offset_deg);
   sigmas.gain = args.number("sigma-gain", sigmas.gain);
-  const Model truth = args.has("truth") ? loadModelFile(args.get("truth", ""))
-                                        : perturbModel(nominal, sigmas, truth_rng);
+  TrueRobot true_robot =
+      args.has("truth") ? loadTruthFile(args.get("truth", ""))
+                        : TrueRobot{perturbModel(nominal, sigmas, truth_rng), Realism::ideal()};
+  if (args.has("realism")) true_robot.realism = realismArg(args.get("realism", ""));
+  const Model& truth = true_robot.model;
+  RunTrack track;
+  track.minutes_per_point = args.number("minutes-per-point", track.minutes_per_point);
+  if (!(track.minutes_per_point >= 0)) throw UsageError("--minutes-per-point must not be negative");
 
   MeasurementNoise noise;
   noise.length_sigma_mm = args.number("noise-mm", noise.length_sigma_mm);
@@ -89,9 +146,15 @@ int run(const std::vector<std::string>& argv) {
       req.extension_mm = s.extension_mm;
       req.shell = s.shell;
       ShellPoses poses;
-      for (const PlanStep& step : s.steps)
-        if (step.kind == StepKind::kPoint)
-          poses.poses.push_back({step.lat_deg, step.lon_deg, step.joints_deg});
+      std::vector<JointsDeg> vias;  // the arm's way to the next point
+      for (const PlanStep& step : s.steps) {
+        if (step.kind == StepKind::kPoint) {
+          poses.poses.push_back({step.lat_deg, step.lon_deg, step.joints_deg, vias});
+          vias.clear();
+        } else {
+          vias.push_back(step.joints_deg);
+        }
+      }
       poses.dropped = static_cast<int>(s.dropped.size());
       req.points = static_cast<int>(poses.poses.size());
       shells.emplace_back(req, std::move(poses));
@@ -109,7 +172,7 @@ int run(const std::vector<std::string>& argv) {
   }
   for (const auto& [req, poses] : shells) {
     const Connection& c = req.connection;
-    auto shell_samples = measureShell(truth, req, poses.poses, noise, noise_rng);
+    auto shell_samples = measureShell(true_robot, req, poses.poses, noise, noise_rng, track);
     for (const ShellPose& p : poses.poses) {
       const Eigen::Vector3d& ball = nominal.balls_mm[c.ball_index];
       worst_offset_mm = std::max(worst_offset_mm, (true_kin.ballPosition(p.joints_deg, ball) -
@@ -126,8 +189,10 @@ int run(const std::vector<std::string>& argv) {
       "wrote %zu samples to %s (noise %.3f mm); the truth puts the balls up to %.2f mm "
       "from the nominal\n",
       samples.size(), out.c_str(), noise.length_sigma_mm, worst_offset_mm);
+  if (!true_robot.realism.isIdeal())
+    std::printf("%s\n", realismSummary(true_robot, samples).c_str());
   if (args.has("truth-out")) {
-    saveModelFile(args.get("truth-out", ""), truth);
+    saveTruthFile(args.get("truth-out", ""), true_robot);
     std::printf("wrote the true model to %s\n", args.get("truth-out", "").c_str());
   }
   return 0;

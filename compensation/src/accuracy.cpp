@@ -71,12 +71,17 @@ ErrorStats errorStats(std::vector<double> values) {
 }
 
 AccuracyReport assessAccuracy(const Compensator& compensator,
-                              const std::vector<Eigen::Isometry3d>& targets, const Model* truth) {
+                              const std::vector<Eigen::Isometry3d>& targets,
+                              const TrueRobot* truth) {
   AccuracyReport r;
   r.requested = targets.size();
   r.has_truth = truth != nullptr;
   std::optional<Kinematics> true_kin;
-  if (truth) true_kin.emplace(*truth);
+  if (truth) true_kin.emplace(truth->modelAt(1e6));  // warm
+  // Where the true robot's tool is at commanded readings.
+  const auto true_tool = [&](const JointsDeg& q) {
+    return true_kin->toolPose(truth->effectiveReadings(q, kPositiveApproach));
+  };
   const Eigen::Isometry3d& tool = compensator.options().tool;
   std::vector<double> pred_pos, pred_ori, nom_pos, nom_ori, comp_pos, comp_ori, model_pos,
       model_ori;
@@ -84,8 +89,8 @@ AccuracyReport assessAccuracy(const Compensator& compensator,
     PoseAccuracy a;
     a.target = compensator.forPose(pose);
     if (true_kin) {
-      const Eigen::Isometry3d at_nominal = true_kin->toolPose(a.target.nominal_joints_deg) * tool;
-      const Eigen::Isometry3d at_compensated = true_kin->toolPose(a.target.joints_deg) * tool;
+      const Eigen::Isometry3d at_nominal = true_tool(a.target.nominal_joints_deg) * tool;
+      const Eigen::Isometry3d at_compensated = true_tool(a.target.joints_deg) * tool;
       a.nominal_commanded = poseDifference(at_nominal, pose);
       a.compensated_commanded = poseDifference(at_compensated, pose);
       a.calibrated_model =

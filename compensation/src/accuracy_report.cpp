@@ -77,6 +77,7 @@ ojson accuracyJson(const AccuracyReport& r, bool per_pose) {
       ojson one = {
           {"pose", {pose.x_mm, pose.y_mm, pose.z_mm, pose.rz_deg, pose.ry_deg, pose.rx_deg}},
           {"status", compensationStatusName(t.status)},
+          {"note", t.reason},
           {"config", armConfigName(t.config)},
           {"nominal_joints_deg",
            std::vector<double>(t.nominal_joints_deg.data(), t.nominal_joints_deg.data() + 6)},

@@ -5,6 +5,7 @@
 #include <robocal/kinematics/units.hpp>
 
 #include <cmath>
+#include <optional>
 
 namespace robocal {
 namespace {
@@ -124,7 +125,7 @@ ShellPoses shellPoses(const Model& model, const ShellRequest& req, std::mt19937_
       }
       previous = *found;
       have_previous = true;
-      out.poses.push_back({lat_deg, lon_deg, *found});
+      out.poses.push_back({lat_deg, lon_deg, *found, {}});
     }
   }
   return out;
@@ -133,16 +134,44 @@ ShellPoses shellPoses(const Model& model, const ShellRequest& req, std::mt19937_
 std::vector<Sample> measureShell(const Model& truth, const ShellRequest& req,
                                  const std::vector<ShellPose>& poses, const MeasurementNoise& noise,
                                  std::mt19937_64& rng) {
-  const Kinematics kin(truth);
+  RunTrack track;
+  return measureShell(TrueRobot{truth, Realism::ideal()}, req, poses, noise, rng, track);
+}
+
+void RunTrack::moveTo(const JointsDeg& q_deg) {
+  if (started) approach = approachOf(last_deg, q_deg, approach);
+  started = true;
+  last_deg = q_deg;
+}
+
+std::vector<Sample> measureShell(const TrueRobot& truth, const ShellRequest& req,
+                                 const std::vector<ShellPose>& poses, const MeasurementNoise& noise,
+                                 std::mt19937_64& rng, RunTrack& track) {
+  const bool ideal = truth.realism.isIdeal();
+  std::optional<Kinematics> fixed;
+  if (ideal || truth.realism.warmup_k == 0) fixed.emplace(truth.model);
   std::normal_distribution<double> length_noise(0.0, noise.length_sigma_mm);
   std::vector<Sample> samples;
   samples.reserve(poses.size());
+  const Connection& c = req.connection;
+  const Eigen::Vector3d& ball = truth.model.balls_mm[c.ball_index];
+  const Eigen::Vector3d& chuck = truth.model.chucks_mm[c.chuck_index];
   for (const ShellPose& pose : poses) {
-    const Connection& c = req.connection;
-    Sample s =
-        makeSample(req.shell, c, req.extension_mm, pose.lat_deg, pose.lon_deg, pose.joints_deg,
-                   kin.barLength(pose.joints_deg, truth.balls_mm[c.ball_index],
-                                 truth.chucks_mm[c.chuck_index]));
+    for (const JointsDeg& via : pose.vias_deg) track.moveTo(via);
+    track.moveTo(pose.joints_deg);
+    track.minutes += track.minutes_per_point;
+    double length_mm = 0;
+    if (ideal) {
+      length_mm = fixed->barLength(pose.joints_deg, ball, chuck);
+    } else {
+      const JointsDeg q = truth.effectiveReadings(pose.joints_deg, track.approach);
+      const double distance_mm =
+          fixed ? fixed->barLength(q, ball, chuck)
+                : Kinematics(truth.modelAt(track.minutes)).barLength(q, ball, chuck);
+      length_mm = truth.measuredLength(distance_mm, req.radius_mm);
+    }
+    Sample s = makeSample(req.shell, c, req.extension_mm, pose.lat_deg, pose.lon_deg,
+                          pose.joints_deg, length_mm);
     if (noise.length_sigma_mm > 0) s.length_mm += length_noise(rng);
     if (noise.joint_quantum_deg > 0)
       for (int j = 0; j < kJointCount; ++j)

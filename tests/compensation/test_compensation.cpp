@@ -135,7 +135,8 @@ TEST_CASE("over the work volume, compensation makes a simulated robot at least 1
   work.poses = 60;
   const auto poses = workVolumePoses(work, comp);
   REQUIRE(poses.size() == 60);
-  const AccuracyReport r = assessAccuracy(comp, poses, &truth);
+  const TrueRobot true_robot{truth, Realism::ideal()};
+  const AccuracyReport r = assessAccuracy(comp, poses, &true_robot);
   CHECK(r.ok == 60);
   INFO(accuracyText(r));
   CHECK(r.nominal_position_mm.rms > 0.3);

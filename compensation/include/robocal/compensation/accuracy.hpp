@@ -6,6 +6,7 @@
 
 #include <robocal/compensation/compensate.hpp>
 #include <robocal/planner/cell.hpp>
+#include <robocal/sim/true_robot.hpp>
 
 #include <optional>
 #include <vector>
@@ -55,10 +56,12 @@ struct AccuracyReport {
   ErrorStats calibrated_model_position_mm, calibrated_model_orientation_deg;
 };
 
-// Compensates every target pose and gathers the statistics over those with status ok. `truth`,
-// when given, is the true robot of a simulation.
+// Compensates every target pose and gathers the statistics over those solved. `truth`, when
+// given, is the true robot of a simulation: with realism (sim/true_robot.hpp), the arm is judged
+// as it works: warm (the warm-up over), every joint approaching its target in the positive
+// direction, carrying the truth's payload.
 AccuracyReport assessAccuracy(const Compensator& compensator,
                               const std::vector<Eigen::Isometry3d>& targets,
-                              const Model* truth = nullptr);
+                              const TrueRobot* truth = nullptr);
 
 }  // namespace robocal

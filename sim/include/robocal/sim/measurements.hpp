@@ -4,6 +4,7 @@
 
 #include <robocal/kinematics/model.hpp>
 #include <robocal/kinematics/sample.hpp>
+#include <robocal/sim/true_robot.hpp>
 
 #include <random>
 #include <vector>
@@ -40,6 +41,9 @@ std::vector<ShellRequest> shellRequests(const std::vector<Connection>& connectio
 struct ShellPose {
   double lat_deg = 0, lon_deg = 0;
   JointsDeg joints_deg = JointsDeg::Zero();
+  // The vias the arm moves through on its way here (a plan's via steps); they decide, with the
+  // point, the direction each joint last moved in (a true robot's backlash).
+  std::vector<JointsDeg> vias_deg;
 };
 
 struct ShellPoses {
@@ -57,10 +61,27 @@ struct MeasurementNoise {
   double joint_quantum_deg = 0;    // reading resolution; 0 = exact readings
 };
 
-// The samples the true robot gives at the given joint positions: length = true distance + noise,
-// readings quantised when asked.
+// The samples a true robot that is exactly its model gives at the given joint positions:
+// length = true distance + noise, readings quantised when asked.
 std::vector<Sample> measureShell(const Model& truth, const ShellRequest& request,
                                  const std::vector<ShellPose>& poses, const MeasurementNoise& noise,
                                  std::mt19937_64& rng);
+
+// Where a simulated run is: the arm's last readings, each joint's last direction of motion, and
+// the time into the run (a true robot's backlash and warm-up depend on them).
+struct RunTrack {
+  bool started = false;
+  JointsDeg last_deg = JointsDeg::Zero();
+  Approach approach = kPositiveApproach;
+  double minutes = 0;
+  double minutes_per_point = 0.1;  // robot time a point costs, moves and dwell (the default plan's)
+  void moveTo(const JointsDeg& q_deg);
+};
+
+// The samples a true robot with its realism gives along a run: each pose reached through its vias
+// (the approach), at the run's time, the bar read through the instrument's errors, plus noise.
+std::vector<Sample> measureShell(const TrueRobot& truth, const ShellRequest& request,
+                                 const std::vector<ShellPose>& poses, const MeasurementNoise& noise,
+                                 std::mt19937_64& rng, RunTrack& track);
 
 }  // namespace robocal
