@@ -1,5 +1,5 @@
 // A simulated true robot that is not its model: the 54-parameter model plus the effects a real arm
-// and instrument carry (../shared/docs/realism.md has their sizes and sources):
+// and instrument carry (docs/realism.md has their sizes and sources):
 //   - gear backlash: each joint's angle is off by half its backlash, in the direction the joint
 //     last moved (`approach`, +1 or -1 per joint);
 //   - joint compliance under gravity: each joint twists by its compliance times the gravity torque
@@ -50,7 +50,7 @@ struct Realism {
   double bar_length_error = 0;
 
   static Realism ideal() { return {}; }
-  // The values of ../shared/docs/realism.md's middle: backlash 0.01 deg, a PUMA 560's link masses
+  // The middle of the sizes docs/realism.md cites: backlash 0.01 deg, a PUMA 560's link masses
   // with a 1 kg fixture and compliances that twist joints 2 and 3 by about 0.03 deg at their
   // largest torque, a 3 K warm-up (30 min), an LVDT with 1e-4 gain error and 7.5 um of
   // nonlinearity.
