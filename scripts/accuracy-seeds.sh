@@ -6,6 +6,7 @@
 # seed and the worst case. Usage: scripts/accuracy-seeds.sh [SEEDS (default 10)]
 # ROBOCAL_REALISM=typical (or a realism JSON file) gives the true robots what a real arm carries
 # beside its geometry (robocal simulate --realism, docs/realism.md); the default is ideal.
+# ROBOCAL_CELL: another cell file (e.g. with motion.approach_deg set).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${ROBOCAL_BUILD_DIR:-$root/build}
@@ -14,7 +15,7 @@ seeds=${1:-10}
 model=$root/config/puma560.json
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-"$bin" plan --model "$model" --cell "$root/config/cell.json" --out "$work/plan.json" >/dev/null
+"$bin" plan --model "$model" --cell "${ROBOCAL_CELL:-$root/config/cell.json}" --out "$work/plan.json" >/dev/null
 echo "| seed | samples | fit RMS (mm) | nominal joints RMS / p95 (mm) | compensated RMS / p95 / max (mm) | ratio | model's own RMS (mm) | predicted RMS (mm) | orientation nominal / compensated RMS (deg) |"
 echo "|---|---|---|---|---|---|---|---|---|"
 for seed in $(seq 1 "$seeds"); do

@@ -393,6 +393,50 @@ bool ShellPlanner::planArc(const Connection& c, double radius, const ArmConfig& 
   return planArc(c, radius, config, mid, b, depth + 1, vias, worst, why);
 }
 
+bool ShellPlanner::planApproach(const Connection& c, double radius, const ArmConfig& config,
+                                const Node& a, const Node& b, std::vector<PlanStep>& vias,
+                                double& worst, std::string& why) const {
+  const double step_deg = cell_.motion.approach_deg;
+  if (step_deg <= 0) return planArc(c, radius, config, a, b, 0, vias, worst, why);
+  // Every joint steps back by step_deg; one joint steps back further so that the ball stays on
+  // the shell (the bar's length changes by g . dq, g its gradient in the joints): the step alone
+  // moved the ball radially by up to 0.9 mm at 0.05 deg.
+  JointsDeg pre_q = b.q - JointsDeg::Constant(step_deg);
+  const Eigen::Vector3d& ball = model().balls_mm[c.ball_index];
+  const Eigen::Vector3d& chuck = model().chucks_mm[c.chuck_index];
+  const Kinematics& kin = ik_.kinematics();
+  const double at_b = kin.barLength(b.q, ball, chuck);
+  JointsDeg gradient;  // mm per deg
+  for (int j = 0; j < kJointCount; ++j) {
+    JointsDeg q = b.q;
+    q[j] += 1e-3;
+    gradient[j] = (kin.barLength(q, ball, chuck) - at_b) / 1e-3;
+  }
+  const double change_mm = gradient.dot(pre_q - b.q);
+  int best = -1;  // the joint whose further step back undoes the change best
+  for (int j = 0; j < kJointCount; ++j)
+    if (gradient[j] * change_mm > 0 &&
+        (best < 0 || std::abs(gradient[j]) > std::abs(gradient[best])))
+      best = j;
+  if (best >= 0) {
+    pre_q[best] -= std::min(change_mm / gradient[best], 10 * step_deg);
+    for (int newton = 0; newton < 3; ++newton)  // onto the shell exactly, as every other step
+      pre_q[best] -= (kin.barLength(pre_q, ball, chuck) - at_b) / gradient[best];
+    if (pre_q[best] > b.q[best] - step_deg) pre_q[best] = b.q[best] - step_deg;
+  }
+  const std::string problem = poseProblem(c, radius, pre_q, cell_.motion.via_tolerance_mm);
+  if (!problem.empty()) {
+    why = "its approach pre-point: " + problem;
+    return false;
+  }
+  const Eigen::Isometry3d pose = ik_.kinematics().toolPose(pre_q);
+  Node pre = nodeFor(c, radius, b.lat_deg, b.lon_deg, pose, pre_q);
+  latLonOf(pre.n, pre.lat_deg, pre.lon_deg);  // where its ball is: a step states its place
+  if (!planArc(c, radius, config, a, pre, 0, vias, worst, why)) return false;
+  vias.push_back({StepKind::kVia, pre_q, pre.lat_deg, pre.lon_deg});
+  return planArc(c, radius, config, pre, b, kMaxBisections, vias, worst, why);
+}
+
 double ShellPlanner::moveDuration(const JointsDeg& a, const JointsDeg& b) const {
   return (b - a).cwiseAbs().maxCoeff() / cell_.motion.joint_speed_deg_per_s +
          cell_.motion.move_overhead_s;
@@ -671,8 +715,8 @@ ShellPlan ShellPlanner::joinPoints(const Connection& c, double extension_mm, int
     Node node = nodeFor(c, radius, ch.lat_deg, ch.lon_deg, pose, s.joints_deg);
     std::vector<PlanStep> vias;
     std::string why = "after turning joints 4 and 6: " + problem;
-    bool joined = problem.empty() && planArc(c, radius, shell.config, prev, node, 0, vias,
-                                             shell.summary.max_deviation_mm, why);
+    bool joined = problem.empty() && planApproach(c, radius, shell.config, prev, node, vias,
+                                                  shell.summary.max_deviation_mm, why);
     if (!joined) {
       // Other orientations at the point, nearest to the previous step's first.
       std::vector<std::pair<double, Offset>> others;
@@ -693,8 +737,8 @@ ShellPlan ShellPlanner::joinPoints(const Connection& c, double extension_mm, int
         node = nodeFor(c, radius, ch.lat_deg, ch.lon_deg, alt, t.joints_deg);
         vias.clear();
         std::string ignored;
-        joined = planArc(c, radius, shell.config, prev, node, 0, vias,
-                         shell.summary.max_deviation_mm, ignored);
+        joined = planApproach(c, radius, shell.config, prev, node, vias,
+                              shell.summary.max_deviation_mm, ignored);
       }
     }
     if (!joined) {
@@ -752,6 +796,8 @@ ShellPlan ShellPlanner::replanRemaining(const ShellPlan& old, std::size_t next_s
       old_vias.clear();
       continue;
     }
+    // The old approach pre-point is planned afresh from the new point.
+    if (cell_.motion.approach_deg > 0 && !old_vias.empty()) old_vias.pop_back();
     const Node node = nodeFor(c, radius, step.lat_deg, step.lon_deg, pose, s.joints_deg);
     // Through the carried-over vias first (bisecting where a move needs more), else afresh.
     std::vector<PlanStep> vias;
@@ -768,12 +814,12 @@ ShellPlan ShellPlanner::replanRemaining(const ShellPlan& old, std::size_t next_s
       from = &v;
     }
     if (joined)
-      joined = planArc(c, radius, shell.config, *from, node, 0, vias,
-                       shell.summary.max_deviation_mm, why);
+      joined = planApproach(c, radius, shell.config, *from, node, vias,
+                            shell.summary.max_deviation_mm, why);
     if (!joined) {
       vias.clear();
-      joined = planArc(c, radius, shell.config, prev, node, 0, vias, shell.summary.max_deviation_mm,
-                       why);
+      joined = planApproach(c, radius, shell.config, prev, node, vias,
+                            shell.summary.max_deviation_mm, why);
     }
     old_vias.clear();
     if (!joined) {

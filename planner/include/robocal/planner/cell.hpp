@@ -53,6 +53,13 @@ struct MotionSettings {
   double swap_s = 60;                 // the operator's time to move the bar to a new connection
   double via_tolerance_mm = 0.5;      // nominal radial deviation allowed along every segment
   double sample_step_mm = 0.5;        // ball spacing when segments are checked (<= 1 mm)
+  // When positive, every data point is reached from a pre-point this far below it in every joint
+  // (one joint further, so that the ball stays on the shell): each joint moves into every point
+  // in the positive direction and a real arm's gear backlash is the same at all of them, absorbed
+  // by the joint offsets instead of scattering the fit. At least the backlash (0.005-0.02 deg);
+  // 0.02 halved the realistic truth's extra error (docs/accuracy.md). Off (0) by default until the
+  // optimal and check plans are tuned with it (they lose points and minutes to it).
+  double approach_deg = 0;
 };
 
 // Model error assumed by the plan's forecast of the bar's deflection: Gaussian perturbations of

@@ -210,6 +210,12 @@ class ShellPlanner {
                std::string& why) const;
   bool segmentOk(const Connection& c, double radius, const JointsDeg& a, const JointsDeg& b,
                  double tolerance_mm, double& worst, std::string& why) const;
+  // The way from `a` into the point `b`: vias (planArc) to b's approach pre-point
+  // (motion.approach_deg below b in every joint, checked like any via), the pre-point, so that
+  // every joint moves into b in the positive direction. Without pre-points, planArc(a, b).
+  bool planApproach(const Connection& c, double radius, const ArmConfig& config, const Node& a,
+                    const Node& b, std::vector<PlanStep>& vias, double& worst,
+                    std::string& why) const;
   void finishShell(ShellPlan& shell) const;
   Node nodeFor(const Connection& c, double radius, double lat_deg, double lon_deg,
                const Eigen::Isometry3d& pose, const JointsDeg& q) const;
