@@ -124,6 +124,7 @@ void printText(const FitAssessment& a, const Model& calibrated, size_t files) {
       std::printf("  %s: residual %+.4f mm (%.1f robust sigmas)\n", where(o.sample).c_str(),
                   o.residual_mm, o.robust_sigmas);
   }
+  std::printf("model adequacy: %s\n", a.adequacy.summary().c_str());
   std::printf("\nresidual per shell after the fit:\n");
   printShells(a.shells);
   if (a.validation) {

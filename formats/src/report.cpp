@@ -328,6 +328,21 @@ nlohmann::ordered_json fitSummaryJson(const FitAssessment& a) {
                {"predicted_ball_error_max_mm", a.predicted_ball_error_max_mm},
                {"bar_to_endpoint_factor", a.bar_to_endpoint_factor},
                {"outlier_sigmas", a.outlier_sigmas}};
+  ojson patterns = ojson::array();
+  for (const AdequacyPattern& p : a.adequacy.patterns)
+    patterns.push_back({{"pattern", p.pattern},
+                        {"detail", p.detail},
+                        {"found", p.found},
+                        {"chi2", p.chi2},
+                        {"threshold", p.threshold},
+                        {"rms_mm", p.rms_mm}});
+  // noise_mm: the bar's noise measured by revisits of points (none yet: null).
+  out["adequacy"] = {{"ok", a.adequacy.ok},
+                     {"noise_mm", nullptr},
+                     {"sigma_mm", a.adequacy.sigma_mm},
+                     {"lack_of_fit_mm", a.adequacy.unmodelled_mm},
+                     {"summary", a.adequacy.summary()},
+                     {"patterns", patterns}};
   ojson outliers = ojson::array();
   for (const FlaggedOutlier& o : a.outliers) {
     ojson j = sampleRef(o.sample);

@@ -116,6 +116,7 @@ FitAssessment assessFit(const Model& nominal, std::vector<Sample> samples,
   a.parameters = parameterTable(nominal, a.fit);
   a.shells = shellTable(a.samples, a.fit.residuals);
   a.connections = connectionsOf(a.samples);
+  a.adequacy = testAdequacy(a.calibrated, a.samples, a.fit.residuals, a.fit.sigma_mm);
   a.problems = fitProblems(a, options.verdict);
 
   if (options.validation) {

@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include <robocal/kinematics/puma560.hpp>
+#include <robocal/sim/measurements.hpp>
 #include <robocal/solver/assessment.hpp>
 #include <robocal/solver/verdict.hpp>
 
@@ -88,4 +89,36 @@ TEST_CASE("verdict: units are judged from the data, not guessed from a few sampl
   CHECK_FALSE(samplesUnitsProblem(nominal, radians));  // 9 samples: too few to judge
   radians.push_back(radians.back());
   CHECK(samplesUnitsProblem(nominal, radians));
+}
+
+TEST_CASE("adequacy: backlash shows as a pattern of the approach, an ideal robot shows none") {
+  const Model nominal = puma560NominalModel();
+  Realism backlash = Realism::ideal();
+  backlash.backlash_deg = {0.01, 0.01, 0.01, 0.01, 0.01, 0.01};
+  int fired_ideal = 0, fired_backlash = 0;
+  const int seeds = 5;
+  for (int seed = 0; seed < seeds; ++seed) {
+    const Model truth = perturbed(1.0, 90 + seed);
+    const Shells shells = planShells(nominal, "all", 0, 40, 100 + seed);
+    for (const bool with_backlash : {false, true}) {
+      // The shells measured in order, each point reached from the previous one.
+      std::mt19937_64 rng(200 + seed);
+      RunTrack track;
+      std::vector<Sample> samples;
+      for (size_t i = 0; i < shells.requests.size(); ++i) {
+        const auto s = measureShell(TrueRobot{truth, with_backlash ? backlash : Realism::ideal()},
+                                    shells.requests[i], shells.poses[i], {0.084, 0}, rng, track);
+        samples.insert(samples.end(), s.begin(), s.end());
+      }
+      const FitAssessment a = assessFit(nominal, samples);
+      INFO("seed " << seed << (with_backlash ? " backlash: " : " ideal: ") << a.adequacy.summary());
+      (with_backlash ? fired_backlash : fired_ideal) += !a.adequacy.ok;
+      if (with_backlash && !a.adequacy.ok) {
+        CHECK_THAT(a.adequacy.summary(), Catch::Contains("approach direction of joint"));
+        CHECK(a.adequacy.unmodelled_mm > 0.01);
+      }
+    }
+  }
+  CHECK(fired_backlash == seeds);
+  CHECK(fired_ideal <= 1);
 }

@@ -12,6 +12,7 @@
 
 #include <robocal/kinematics/model.hpp>
 #include <robocal/kinematics/sample.hpp>
+#include <robocal/solver/adequacy.hpp>
 #include <robocal/solver/calibrate.hpp>
 #include <robocal/solver/verdict.hpp>
 
@@ -103,6 +104,8 @@ struct FitAssessment {
   // Why the calibrated model should not replace the nominal, one sentence each (what and why);
   // empty for a usable fit.
   std::vector<std::string> problems;
+  // Whether the residual follows a pattern of error the model does not contain (adequacy.hpp).
+  Adequacy adequacy;
   std::optional<ValidationResult> validation;
   std::optional<TruthComparison> truth;  // at the validation samples' poses, else the fitted ones
 };

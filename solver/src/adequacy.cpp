@@ -1,0 +1,158 @@
+#include <robocal/kinematics/kinematics.hpp>
+#include <robocal/solver/adequacy.hpp>
+#include <robocal/solver/problem.hpp>
+
+#include <Eigen/QR>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace robocal {
+namespace {
+
+// Upper quantiles of the chi-square distribution, at 1e-3 and 1e-2 (1 to 6 degrees of freedom).
+double chi2Quantile(int dof, double false_alarm) {
+  static constexpr double k1e3[] = {10.828, 13.816, 16.266, 18.467, 20.515, 22.458};
+  static constexpr double k1e2[] = {6.635, 9.210, 11.345, 13.277, 15.086, 16.812};
+  const int i = std::clamp(dof, 1, 6) - 1;
+  return false_alarm <= 1e-3 ? k1e3[i] : k1e2[i];
+}
+
+bool sameShell(const Sample& a, const Sample& b) {
+  return a.shell == b.shell && a.ball_index == b.ball_index && a.chuck_index == b.chuck_index &&
+         a.extension_mm == b.extension_mm;
+}
+
+std::string joinJoints(const std::vector<int>& joints) {
+  std::string out = joints.size() == 1 ? "joint " : "joints ";
+  for (size_t i = 0; i < joints.size(); ++i) out += (i ? ", " : "") + std::to_string(joints[i] + 1);
+  return out;
+}
+
+// The features' part the fit cannot explain: F minus its projection on the Jacobian's columns.
+Eigen::MatrixXd unexplained(const Eigen::MatrixXd& features, const Eigen::MatrixXd& jacobian) {
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(jacobian);
+  qr.setThreshold(1e-10);
+  const Eigen::Index rank = qr.rank();
+  const Eigen::MatrixXd q =
+      qr.householderQ() *
+      Eigen::MatrixXd::Identity(jacobian.rows(), std::max<Eigen::Index>(rank, 1));
+  if (rank == 0) return features;
+  return features - q.leftCols(rank) * (q.leftCols(rank).transpose() * features);
+}
+
+struct Regression {
+  double chi2 = 0;
+  double rms_mm = 0;
+};
+
+// The residual regressed on the (unexplained) features.
+Regression regress(const Eigen::MatrixXd& g, const Eigen::VectorXd& r, double sigma_mm) {
+  Regression out;
+  if (g.cols() == 0 || g.norm() == 0) return out;
+  const Eigen::VectorXd beta = g.colPivHouseholderQr().solve(r);
+  const Eigen::VectorXd fitted = g * beta;
+  out.chi2 = fitted.dot(r) / (sigma_mm * sigma_mm);
+  out.rms_mm = std::sqrt(fitted.squaredNorm() / static_cast<double>(r.size()));
+  return out;
+}
+
+}  // namespace
+
+std::string Adequacy::summary() const {
+  char buf[96];
+  if (ok) {
+    std::snprintf(buf, sizeof buf, "no pattern in the residual (sigma %.3f mm)", sigma_mm);
+    return buf;
+  }
+  std::snprintf(buf, sizeof buf, "%.3f mm of error the model does not contain; it follows ",
+                unmodelled_mm);
+  std::string out = buf;
+  bool first = true;
+  for (const AdequacyPattern& p : patterns) {
+    if (!p.found) continue;
+    out += (first ? "the " : " and the ") + p.pattern + (p.detail.empty() ? "" : " of " + p.detail);
+    first = false;
+  }
+  return out;
+}
+
+Adequacy testAdequacy(const Model& calibrated, const std::vector<Sample>& samples,
+                      const Eigen::VectorXd& residuals, double sigma_mm, double false_alarm) {
+  Adequacy a;
+  a.sigma_mm = sigma_mm;
+  const Eigen::Index n = static_cast<Eigen::Index>(samples.size());
+  if (n < 20 || !(sigma_mm > 0) || residuals.size() != n) return a;
+  Eigen::VectorXd unused;
+  Eigen::MatrixXd jacobian;
+  evaluateProblem(calibrated, toParams(calibrated), samples, unused, &jacobian);
+  const Kinematics kin(calibrated);
+
+  // The features, one block per pattern.
+  Eigen::MatrixXd approach = Eigen::MatrixXd::Zero(n, kJointCount);
+  Eigen::MatrixXd gravity = Eigen::MatrixXd::Zero(n, 2);
+  Eigen::MatrixXd time = Eigen::MatrixXd::Zero(n, 1);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Sample& s = samples[static_cast<size_t>(i)];
+    if (i > 0 && sameShell(s, samples[static_cast<size_t>(i - 1)]))
+      for (int j = 0; j < kJointCount; ++j) {
+        const double step = s.joints_deg[j] - samples[static_cast<size_t>(i - 1)].joints_deg[j];
+        if (std::abs(step) > 1e-9)
+          approach(i, j) = jacobian(i, jointParamIndex(j)) * (step > 0 ? 1.0 : -1.0);
+      }
+    const auto frames = kin.chainFrames(s.joints_deg);
+    const Eigen::Vector3d wrist_m = frames[2 * 4 + 1].translation() * 1e-3;
+    for (int k = 0; k < 2; ++k) {
+      const Eigen::Isometry3d& joint = frames[2 * (k + 1) + 1];
+      const double torque = (wrist_m - joint.translation() * 1e-3)
+                                .cross(-Eigen::Vector3d::UnitZ())
+                                .dot(joint.linear().col(2));
+      gravity(i, k) = jacobian(i, jointParamIndex(k + 1)) * torque;
+    }
+    double scale = 0;  // dL/d(growth of the link translations L1..L6)
+    for (int k = 1; k < kLinkCount; ++k) {
+      const LinkParams& l = calibrated.links[k];
+      const int p = linkParamIndex(k);
+      scale += jacobian(i, p) * l.x_mm + jacobian(i, p + 1) * l.y_mm + jacobian(i, p + 2) * l.z_mm;
+    }
+    time(i, 0) = scale * static_cast<double>(i) / static_cast<double>(n - 1);
+  }
+
+  struct Block {
+    const char* name;
+    Eigen::MatrixXd features;
+    int first_joint;  // joint of the first column, for the detail (-1: none)
+  };
+  std::vector<Block> blocks = {{"approach direction", unexplained(approach, jacobian), 0},
+                               {"gravity torque", unexplained(gravity, jacobian), 1},
+                               {"time", unexplained(time, jacobian), -1}};
+  Eigen::MatrixXd found_features(n, 0);
+  for (Block& b : blocks) {
+    AdequacyPattern p;
+    p.pattern = b.name;
+    p.features = static_cast<int>(b.features.cols());
+    p.threshold = chi2Quantile(p.features, false_alarm);
+    const Regression all = regress(b.features, residuals, sigma_mm);
+    p.chi2 = all.chi2;
+    p.rms_mm = all.rms_mm;
+    p.found = p.chi2 > p.threshold;
+    if (p.found && b.first_joint >= 0) {
+      std::vector<int> joints;
+      for (Eigen::Index c = 0; c < b.features.cols(); ++c)
+        if (regress(b.features.col(c), residuals, sigma_mm).chi2 > chi2Quantile(1, false_alarm))
+          joints.push_back(b.first_joint + static_cast<int>(c));
+      if (!joints.empty()) p.detail = joinJoints(joints);
+    }
+    if (p.found) {
+      found_features.conservativeResize(n, found_features.cols() + b.features.cols());
+      found_features.rightCols(b.features.cols()) = b.features;
+    }
+    a.patterns.push_back(p);
+  }
+  a.ok = found_features.cols() == 0;
+  if (!a.ok) a.unmodelled_mm = regress(found_features, residuals, sigma_mm).rms_mm;
+  return a;
+}
+
+}  // namespace robocal
