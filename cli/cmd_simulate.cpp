@@ -8,8 +8,6 @@
 #include <robocal/sim/measurements.hpp>
 #include <robocal/sim/true_robot_json.hpp>
 
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
 #include <cmath>
 
@@ -54,14 +52,7 @@ perturbed (or a given truth), poses on each connection's shell found with the no
 Realism realismArg(const std::string& value) {
   if (value == "ideal") return Realism::ideal();
   if (value == "typical") return Realism::puma560Typical();
-  const std::string text = readTextFile(value);
-  nlohmann::json json;
-  try {
-    json = nlohmann::json::parse(text);
-  } catch (const nlohmann::json::exception& e) {
-    throw FormatError(value + ": not valid JSON: " + e.what());
-  }
-  return realismFromJson(json, value);
+  return loadRealismFile(value);
 }
 
 // What the realism did to these samples, in one line: the largest compliance twist, the warm-up.

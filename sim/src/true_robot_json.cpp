@@ -32,6 +32,15 @@ ojson vec(const Eigen::Vector3d& p) {
   return ojson::array({p.x(), p.y(), p.z()});
 }
 
+nlohmann::json parseJsonFile(const std::string& path) {
+  const std::string text = readTextFile(path);
+  try {
+    return nlohmann::json::parse(text);
+  } catch (const nlohmann::json::exception& e) {
+    throw FormatError(path + ": not valid JSON: " + e.what());
+  }
+}
+
 }  // namespace
 
 Realism realismFromJson(const nlohmann::json& json, const std::string& source) {
@@ -84,19 +93,17 @@ ojson realismToJson(const Realism& r) {
 }
 
 TrueRobot loadTruthFile(const std::string& path) {
-  const std::string text = readTextFile(path);
-  nlohmann::json root;
-  try {
-    root = nlohmann::json::parse(text);
-  } catch (const nlohmann::json::exception& e) {
-    throw FormatError(path + ": not valid JSON: " + e.what());
-  }
+  const nlohmann::json root = parseJsonFile(path);
   TrueRobot t;
   t.model = modelFromJson(root, path);
   if (root.is_object())
     if (const auto it = root.find("realism"); it != root.end())
       t.realism = realismFromJson(*it, path);
   return t;
+}
+
+Realism loadRealismFile(const std::string& path) {
+  return realismFromJson(parseJsonFile(path), path);
 }
 
 void saveTruthFile(const std::string& path, const TrueRobot& truth) {

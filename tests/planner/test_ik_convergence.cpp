@@ -20,12 +20,7 @@ namespace {
 
 Model perturbed(const Model& nominal, double factor, unsigned seed) {
   std::mt19937_64 rng(seed);
-  PerturbationSigmas s;
-  s.translation_mm *= factor;
-  s.link_angle_deg *= factor;
-  s.joint_offset_deg *= factor;
-  s.gain *= factor;
-  return perturbModel(nominal, s, rng);
+  return perturbModel(nominal, PerturbationSigmas{}.scaled(factor), rng);
 }
 
 // The margins robocal compensate calls near a singularity (CompensationOptions).

@@ -40,12 +40,7 @@ inline std::vector<Sample> measure(const Model& truth, const Shells& shells, dou
 
 inline Model perturbed(double factor, unsigned seed) {
   std::mt19937_64 rng(seed);
-  PerturbationSigmas s;
-  s.translation_mm *= factor;
-  s.link_angle_deg *= factor;
-  s.joint_offset_deg *= factor;
-  s.gain *= factor;
-  return perturbModel(puma560NominalModel(), s, rng);
+  return perturbModel(puma560NominalModel(), PerturbationSigmas{}.scaled(factor), rng);
 }
 
 }  // namespace robocal::test

@@ -18,6 +18,11 @@ struct PerturbationSigmas {
   double link_angle_deg = 0.02;    // link rz, ry, rx
   double joint_offset_deg = 0.05;  // joint offsets
   double gain = 0.0005;            // joint gains (unitless)
+  // Every sigma times `factor` (a robot `factor` times as far from its model).
+  PerturbationSigmas scaled(double factor) const {
+    return {translation_mm * factor, link_angle_deg * factor, joint_offset_deg * factor,
+            gain * factor};
+  }
 };
 
 Model perturbModel(const Model& nominal, const PerturbationSigmas& sigmas, std::mt19937_64& rng);

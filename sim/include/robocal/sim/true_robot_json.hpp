@@ -17,6 +17,8 @@ Realism realismFromJson(const nlohmann::json& json, const std::string& source);
 nlohmann::ordered_json realismToJson(const Realism& realism);
 
 TrueRobot loadTruthFile(const std::string& path);
+// A file holding a JSON object of realism keys alone (robocal simulate --realism FILE).
+Realism loadRealismFile(const std::string& path);
 void saveTruthFile(const std::string& path, const TrueRobot& truth);
 
 }  // namespace robocal
