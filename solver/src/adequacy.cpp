@@ -30,16 +30,19 @@ std::string joinJoints(const std::vector<int>& joints) {
   return out;
 }
 
-// The features' part the fit cannot explain: F minus its projection on the Jacobian's columns.
-Eigen::MatrixXd unexplained(const Eigen::MatrixXd& features, const Eigen::MatrixXd& jacobian) {
+// An orthonormal basis of the Jacobian's column space: what the fit's parameters can explain.
+Eigen::MatrixXd explainedBasis(const Eigen::MatrixXd& jacobian) {
   Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(jacobian);
   qr.setThreshold(1e-10);
   const Eigen::Index rank = qr.rank();
-  const Eigen::MatrixXd q =
-      qr.householderQ() *
-      Eigen::MatrixXd::Identity(jacobian.rows(), std::max<Eigen::Index>(rank, 1));
-  if (rank == 0) return features;
-  return features - q.leftCols(rank) * (q.leftCols(rank).transpose() * features);
+  const Eigen::MatrixXd q = qr.householderQ() * Eigen::MatrixXd::Identity(jacobian.rows(), rank);
+  return q;
+}
+
+// The features' part the fit cannot explain: F minus its projection on the basis.
+Eigen::MatrixXd unexplained(const Eigen::MatrixXd& features, const Eigen::MatrixXd& basis) {
+  if (basis.cols() == 0) return features;
+  return features - basis * (basis.transpose() * features);
 }
 
 struct Regression {
@@ -124,9 +127,10 @@ Adequacy testAdequacy(const Model& calibrated, const std::vector<Sample>& sample
     Eigen::MatrixXd features;
     int first_joint;  // joint of the first column, for the detail (-1: none)
   };
-  std::vector<Block> blocks = {{"approach direction", unexplained(approach, jacobian), 0},
-                               {"gravity torque", unexplained(gravity, jacobian), 1},
-                               {"time", unexplained(time, jacobian), -1}};
+  const Eigen::MatrixXd basis = explainedBasis(jacobian);  // one QR for the three patterns
+  std::vector<Block> blocks = {{"approach direction", unexplained(approach, basis), 0},
+                               {"gravity torque", unexplained(gravity, basis), 1},
+                               {"time", unexplained(time, basis), -1}};
   Eigen::MatrixXd found_features(n, 0);
   for (Block& b : blocks) {
     AdequacyPattern p;
