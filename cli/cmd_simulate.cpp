@@ -48,13 +48,6 @@ perturbed (or a given truth), poses on each connection's shell found with the no
   --truth-out FILE          write the true robot (model format, plus its realism)
 )";
 
-// --realism: ideal, typical, or a file holding a JSON object of realism keys.
-Realism realismArg(const std::string& value) {
-  if (value == "ideal") return Realism::ideal();
-  if (value == "typical") return Realism::puma560Typical();
-  return loadRealismFile(value);
-}
-
 // What the realism did to these samples, in one line: the largest compliance twist, the warm-up.
 std::string realismSummary(const TrueRobot& truth, const std::vector<Sample>& samples) {
   double twist_deg = 0;
@@ -103,7 +96,7 @@ int run(const std::vector<std::string>& argv) {
   TrueRobot true_robot =
       args.has("truth") ? loadTruthFile(args.get("truth", ""))
                         : TrueRobot{perturbModel(nominal, sigmas, truth_rng), Realism::ideal()};
-  if (args.has("realism")) true_robot.realism = realismArg(args.get("realism", ""));
+  if (args.has("realism")) true_robot.realism = realismNamed(args.get("realism", ""));
   const Model& truth = true_robot.model;
   RunTrack track;
   track.minutes_per_point = args.number("minutes-per-point", track.minutes_per_point);

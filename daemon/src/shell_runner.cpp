@@ -20,6 +20,9 @@ using Clock = std::chrono::steady_clock;
 // its size; re-centring from it may go this much past where it started before it stops.
 constexpr double kNoLimitMm = std::numeric_limits<double>::infinity();
 constexpr double kConnectSlackMm = 0.1;
+// The connection check's smallest approach step (deg): a real arm's backlash is 0.005-0.02 deg
+// (docs/realism.md).
+constexpr double kCheckApproachDeg = 0.02;
 
 // A data point of a shell, as the samples file identifies it.
 std::tuple<int, double, double> pointKey(int shell, double lat_deg, double lon_deg) {
@@ -298,11 +301,24 @@ void ShellRunner::verifyConnection(const ShellPlan& shell, JointsDeg& q) {
     return ctx_.measureHere(std::max(config.bar_window_s, 0.5));
   };
   const JointsDeg start = q;
+  // Every pose the check reads is reached up in every joint from a pre-point (the plan's approach,
+  // at least kCheckApproachDeg), so that each joint's backlash sits on the same side at every
+  // reading: a real arm's 0.01 deg of it, taken from both sides, changed a correct bar's reading
+  // by 0.07 mm across the bar and failed the check.
+  const double approach_deg = std::max(plan_.cell.motion.approach_deg, kCheckApproachDeg);
+  const auto moveUpTo = [&](const JointsDeg& target) {
+    const JointsDeg pre = target.array() - approach_deg;
+    bool inside = true;
+    for (int j = 0; j < kJointCount; ++j)
+      inside = inside && pre[j] >= centring_.model().joints[j].min_deg;
+    if (inside) ctx_.move(pre, true);
+    return ctx_.move(target, true);
+  };
   // Every step goes from a commanded pose to a commanded pose, and the model predicts the change
   // between them: the joints WHERE reports are rounded (0.01 deg is 0.05 mm at the ball), and a
   // step planned from them moved the ball by that much more than predicted.
   JointsDeg commanded = q;
-  ctx_.move(commanded, true);
+  moveUpTo(commanded);
   double before_mm = settledMeasurement().deflection_mm;
   const Model& model = centring_.model();
   const Connection& c = shell.connection;
@@ -317,7 +333,7 @@ void ShellRunner::verifyConnection(const ShellPlan& shell, JointsDeg& q) {
       throw StopRun{StopRun::kFault, "connection check on shell " + std::to_string(shell.shell) +
                                          ": its step is refused: " + refused};
     const double predicted_mm = barLengthMm(model, c, *target) - barLengthMm(model, c, commanded);
-    q = ctx_.move(*target, true);
+    q = moveUpTo(*target);
     commanded = *target;
     const double after_mm = settledMeasurement().deflection_mm;
     steps.push_back({along_mm, after_mm - before_mm, across_mm, predicted_mm});
@@ -504,7 +520,7 @@ void ShellRunner::completeSet(std::size_t shell_index, bool only_unfitted) {
   if (check)
     fits_.launchCheck(dir_, samples_);  // a verdict on the active model, not a new fit
   else
-    fits_.launch(dir_, samples_, extension_mm, set_index);
+    fits_.launch(dir_, samples_, extension_mm, set_index, plan_.cell.motion.approach_deg);
 }
 
 }  // namespace robocal::daemon

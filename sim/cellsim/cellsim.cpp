@@ -7,6 +7,7 @@
 #include <robocal/kinematics/kinematics.hpp>
 #include <robocal/kinematics/sample.hpp>
 #include <robocal/kinematics/units.hpp>
+#include <robocal/sim/true_robot_json.hpp>
 
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/local/stream_protocol.hpp>
@@ -185,13 +186,14 @@ struct BrokenEvent {
 class Cell {
  public:
   Cell(asio::io_context& io, const Options& o, const drivers::DriversConfig& config,
-       const Model& truth)
+       const TrueRobot& truth)
       : io_(io),
         o_(o),
         val_dialect_(config.val),
         bar_config_(config.bar),
-        truth_(truth),
-        kin_(truth),
+        truth_(truth.model),
+        true_robot_(truth),
+        kin_(truth.model),
         rng_(o.seed),
         val_(io, "val", o.val_link, o.val_baud),
         bar_(io, "bar", o.bar_link, o.bar_baud),
@@ -372,7 +374,8 @@ class Cell {
     // A bar whose ends are further apart (or closer) than its travel cannot be seated: the
     // operator cannot attach it, and the robot has to move first.
     const double length = bar_mm >= 0 ? bar_mm : trueLength() - extension_mm;
-    const double misfit = trueLength() - length - extension_mm;
+    const double misfit =
+        trueLength() - (length + extension_mm) * (1 + true_robot_.realism.bar_length_error);
     if (std::abs(misfit) > o_.range_mm) {
       connection_ = previous;
       char buf[200];
@@ -392,16 +395,43 @@ class Cell {
     checkBar();
   }
 
+  // The distance between the connected ball's and chuck's centres (mm): the true robot's, with
+  // its realism (backlash by each joint's last direction, gravity compliance, the warm-up at this
+  // cell time).
   double trueLength() const {
     JointsDeg j;
     for (int i = 0; i < 6; ++i) j[i] = joints_[i];
-    return kin_.barLength(j, truth_.balls_mm[connection_.ball_index],
-                          truth_.chucks_mm[connection_.chuck_index]);
+    const Eigen::Vector3d& ball = truth_.balls_mm[connection_.ball_index];
+    const Eigen::Vector3d& chuck = truth_.chucks_mm[connection_.chuck_index];
+    if (true_robot_.realism.isIdeal()) return kin_.barLength(j, ball, chuck);
+    return warmKinematics().barLength(true_robot_.effectiveReadings(j, approach_), ball, chuck);
   }
 
+  // The true robot's geometry at this cell time, rebuilt every few cell seconds of the warm-up.
+  const Kinematics& warmKinematics() const {
+    const double minutes = secondsSince(start_time_) * o_.time_scale / 60.0;
+    if (true_robot_.realism.warmup_k == 0) return kin_;
+    if (!warm_kin_ || std::abs(minutes - warm_minutes_) > 0.05) {
+      warm_minutes_ = minutes;
+      warm_kin_.emplace(true_robot_.modelAt(minutes));
+    }
+    return *warm_kin_;
+  }
+
+  // The bar's physical deflection (mm): the travel of its LVDT from the bar's true length (its
+  // stated length with the bar-length standard's error). What breaks the bar.
   double deflection(bool& connected) const {
     connected = connected_;
-    return connected_ ? trueLength() - bar_mm_ - extension_mm_ : 0.0;
+    if (!connected_) return 0.0;
+    const double stated_mm = bar_mm_ + extension_mm_;
+    return trueLength() - stated_mm * (1 + true_robot_.realism.bar_length_error);
+  }
+
+  // What the LVDT reads for that deflection: its gain error and nonlinearity (TrueRobot).
+  double lvdtReading(double deflection_mm) const {
+    const double stated_mm = bar_mm_ + extension_mm_;
+    const double true_mm = deflection_mm + stated_mm * (1 + true_robot_.realism.bar_length_error);
+    return true_robot_.measuredLength(true_mm, stated_mm) - stated_mm;
   }
 
   void checkBar() {
@@ -632,6 +662,11 @@ class Cell {
           return {valErrorLine(dialect(), ValFault::kOutOfRange)};
       ++moves_;
       move_from_ = joints_;
+      {  // each joint's backlash takes the side of the motion about to start
+        JointsDeg from, to;
+        for (int k = 0; k < 6; ++k) from[k] = joints_[k], to[k] = target[k];
+        approach_ = approachOf(from, to, approach_);
+      }
       target_ = target;
       double longest = 0;
       for (int k = 0; k < 6; ++k) longest = std::max(longest, std::abs(target[k] - joints_[k]));
@@ -707,7 +742,8 @@ class Cell {
     if (connected && std::abs(d) > o_.range_mm)
       return drivers::formatBarStatus(BarLineKind::kOverRange, d < 0);
     std::normal_distribution<double> noise(0.0, o_.noise_mm), play(0.0, kLoosePlayMm);
-    const double value_mm = d + (connected ? ring() : 0.0) + (o_.noise_mm > 0 ? noise(rng_) : 0.0) +
+    const double value_mm = (connected ? lvdtReading(d) + ring() : 0.0) +
+                            (o_.noise_mm > 0 ? noise(rng_) : 0.0) +
                             (loose_ && connected ? play(rng_) : 0.0);
     return drivers::formatBarReading(bar_config_.format, value_mm / bar_config_.unit_scale_mm);
   }
@@ -734,7 +770,11 @@ class Cell {
   drivers::ValDialect val_dialect_;
   drivers::BarConfig bar_config_;
   Model truth_;
-  Kinematics kin_;
+  TrueRobot true_robot_;
+  Kinematics kin_;  // the true geometry, cold
+  Approach approach_ = kPositiveApproach;
+  mutable std::optional<Kinematics> warm_kin_;
+  mutable double warm_minutes_ = 0;
   std::mt19937_64 rng_;
   PtyPort val_, bar_;
   asio::steady_timer tick_, stream_timer_;
@@ -818,7 +858,8 @@ void accept(asio::local::stream_protocol::acceptor& acceptor, Cell& cell) {
 }  // namespace
 
 int run(const Options& o) {
-  const Model truth = loadModelFile(o.model_path);
+  TrueRobot truth = loadTruthFile(o.model_path);
+  if (!o.realism.empty()) truth.realism = realismNamed(o.realism);
   const drivers::DriversConfig config =
       o.config_path.empty() ? drivers::DriversConfig{} : drivers::loadDriversConfig(o.config_path);
   asio::io_context io;

@@ -1,5 +1,7 @@
 // robocal-cellsim: a simulated robot cell behind two pseudo-terminals. One speaks the VAL II
-// monitor dialect, the other the ball-bar reader's; behind them a "true" robot (a model file),
+// monitor dialect, the other the ball-bar reader's; behind them a "true" robot (a truth file: a
+// model with the realism of robocal/sim/true_robot.hpp, backlash, compliance, warm-up in cell
+// time, the LVDT's errors),
 // joint motion at finite speed, the bar's true length around the connected ball and chuck, LVDT
 // noise, the tool's ringing after a move (settling.hpp), joint quantisation, the bar's range,
 // and injectable faults. A control channel (a unix
@@ -20,7 +22,9 @@
 namespace robocal::cellsim {
 
 struct Options {
-  std::string model_path;          // the true robot (model format)
+  std::string model_path;  // the true robot (a truth file: model format, optional "realism")
+  // Overrides the truth file's realism: "ideal", "typical" or a realism file; "" keeps it.
+  std::string realism;
   std::string config_path;         // drivers config: the dialects to speak (defaults otherwise)
   std::string val_link, bar_link;  // symlinks to create to the pty slaves
   std::string control_path;        // unix socket for control commands

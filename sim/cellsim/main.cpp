@@ -22,7 +22,10 @@ line on the control socket or stdin: status | events | connect B1C2 [extension_m
 connect none | estop | reset | fault garbage|drop [val] | fault noprobe [off] | fault loose [off] | fault error [TEXT] |
 fault stall val|bar S | fault disconnect val|bar S | quit
 
-  --model FILE               the true robot (model format, e.g. truth.json)       required
+  --model FILE               the true robot: a truth file (robocal simulate --truth-out; a
+                             model file with an optional "realism" object)       required
+  --realism R                ideal | typical | a realism file: overrides the truth file's
+                             (docs/realism.md)                                 [the file's]
   --config FILE              drivers config: the dialects to speak               [defaults]
   --val-link PATH            symlink to the VAL II pty (replaced on reconnect)
   --bar-link PATH            symlink to the ball-bar reader pty
@@ -96,6 +99,7 @@ int main(int argc, char** argv) {
   try {
     std::map<std::string, std::string> v;
     const std::map<std::string, bool> known = {{"model", true},
+                                               {"realism", true},
                                                {"config", true},
                                                {"val-link", true},
                                                {"bar-link", true},
@@ -174,6 +178,7 @@ int main(int argc, char** argv) {
     const auto count = [&](const char* k) { return static_cast<long>(num(k, 0)); };
     if (!has("model")) throw std::invalid_argument("--model is required (e.g. truth.json)");
     o.model_path = v["model"];
+    if (has("realism")) o.realism = v["realism"];
     if (has("config")) o.config_path = v["config"];
     if (has("val-link")) o.val_link = v["val-link"];
     if (has("bar-link")) o.bar_link = v["bar-link"];

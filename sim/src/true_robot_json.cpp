@@ -106,6 +106,12 @@ Realism loadRealismFile(const std::string& path) {
   return realismFromJson(parseJsonFile(path), path);
 }
 
+Realism realismNamed(const std::string& ideal_typical_or_path) {
+  if (ideal_typical_or_path == "ideal") return Realism::ideal();
+  if (ideal_typical_or_path == "typical") return Realism::puma560Typical();
+  return loadRealismFile(ideal_typical_or_path);
+}
+
 void saveTruthFile(const std::string& path, const TrueRobot& truth) {
   ojson out = modelToJson(truth.model);
   if (!truth.realism.isIdeal()) out["realism"] = realismToJson(truth.realism);

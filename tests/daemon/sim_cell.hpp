@@ -89,8 +89,14 @@ struct Cell {
         sim::answerPrompt(
             c, proto::parseObject<proto::Prompt>(*o),
             [&](const std::string& cmd) { return sim->control(cmd); }, daemon->token(), 150);
-      if (cls == "STATE" && states.count((*o)["to"])) return (*o)["to"];
+      if (cls == "STATE" && states.count((*o)["to"])) {
+        // Why the run stopped, in the report of any check on the state that follows.
+        UNSCOPED_INFO("the run went " << (*o)["to"].get<std::string>() << ": "
+                                      << o->value("reason", std::string("(no reason)")));
+        return (*o)["to"];
+      }
     }
+    UNSCOPED_INFO("no state of interest within " << timeout_s << " s");
     return "";
   }
 

@@ -194,3 +194,34 @@ TEST_CASE("Bar: other line formats and units", "[drivers][bar]") {
     CHECK(bar.read().line.rfind("GN01,", 0) == 0);
   }
 }
+
+TEST_CASE("Bar: a true robot with backlash reads its joints' last direction; --realism ideal not",
+          "[drivers][bar]") {
+  // Joint 2 with 0.04 deg of backlash: its angle is 0.02 deg ahead of its reading in the direction
+  // it last moved (cellsim starts as if every joint had moved up).
+  const std::string realism = "{\"backlash_deg\": [0, 0.04, 0, 0, 0, 0]}";
+  for (const bool ideal : {false, true}) {
+    CAPTURE(ideal);
+    CellSimProcess probe;  // for a private folder to hold the realism file
+    const std::string path = probe.dir() + "/realism.json";
+    REQUIRE(robocal::test::runShell("printf '%s' '" + realism + "' > " + path).first == 0);
+    CellSimProcess sim({"--time-scale", "20", "--noise-mm", "0", "--realism",
+                        ideal ? std::string("ideal") : path});
+    REQUIRE(sim.control("connect B2C3 bar_mm=here").rfind("ok", 0) == 0);
+    const auto config = sim.driversConfig();
+    boost::asio::io_context io;
+    BarReader bar(io, config.bar);
+    bar.connect();
+    CHECK(std::abs(bar.readValueMm()) < 0.005);
+    ValController val(io, config.val);
+    val.connect();
+    val.moveJoints({0, 45.05, -90, 0, 45, 0});
+    val.moveJoints(kStart);  // back to the same readings, joint 2 now moving down
+    const auto model = robocal::loadModelFile(ROBOCAL_SOURCE_DIR "/config/puma560.json");
+    const double backlash_mm = trueLength(model, {0, 44.98, -90, 0, 45, 0}, 1, 2) -
+                               trueLength(model, {0, 45.02, -90, 0, 45, 0}, 1, 2);
+    REQUIRE(std::abs(backlash_mm) > 0.1);
+    REQUIRE(std::abs(backlash_mm) < 1.0);
+    CHECK(bar.readValueMm() == Approx(ideal ? 0.0 : backlash_mm).margin(0.005));
+  }
+}
