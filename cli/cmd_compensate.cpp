@@ -35,10 +35,16 @@ unreachable; the last two carry no joints (docs/compensation.md).
   --nominal FILE        the controller's model: only a check, refused when it differs from the
                         nominal recorded in MODEL       [the recorded one, else the PUMA 560]
   --tool X,Y,Z,RZ,RY,RX tool centre point in the ball fixture's frame (mm, deg)       [0,...]
-  --format F            csv: name,j1..j6,predicted_error_mm,status,config,note          [csv]
+  --approach-deg D      reach each target from a pre-point D deg below it in every joint,
+                        as the calibration reached its points (backlash then sits where the
+                        calibration measured it); 0: no pre-points   [the model's, else 0]
+  --format F            csv: name,j1..j6,a1..a6,predicted_error_mm,status,config,note   [csv]
+                          (a1..a6: each joint's direction into the target, 1 = up, empty
+                          without an approach)
                         val2: one VAL II precision point #PPOINT(j1, ..., j6) per line
                         val2-move: DO MOVE #PPOINT(...) lines
-                        (rows that cannot be commanded become ; comment lines)
+                        (with an approach, each target's pre-point on the line before it;
+                        rows that cannot be commanded become ; comment lines)
 
 exit status: 0 every target ok, 1 an unreadable input, 2 a usage error,
              3 written, but some targets are not ok (listed on stderr)
@@ -47,7 +53,8 @@ exit status: 0 every target ok, 1 an unreadable input, 2 a usage error,
 constexpr int kExitSomeNotOk = 3;
 
 int run(const std::vector<std::string>& argv) {
-  const Args args(argv, {"model", "targets", "out", "nominal", "tool", "format"}, {"help"});
+  const Args args(argv, {"model", "targets", "out", "nominal", "tool", "format", "approach-deg"},
+                  {"help"});
   if (args.flag("help")) {
     std::fputs(kHelp, stdout);
     return 0;
@@ -61,6 +68,11 @@ int run(const std::vector<std::string>& argv) {
     const auto tool = parsePoseText(args.get("tool", ""));
     if (!tool) throw UsageError("--tool: expected x,y,z,rz,ry,rx (mm, deg)");
     options.tool = *tool;
+  }
+  if (args.has("approach-deg")) {
+    options.approach_deg = args.number("approach-deg", 0);
+    if (!(*options.approach_deg >= 0 && *options.approach_deg <= 1))
+      throw UsageError("--approach-deg must be 0 to 1 (deg)");
   }
   const auto format = parseOutputFormat(args.get("format", "csv"));
   if (!format) throw UsageError("--format: expected csv, val2 or val2-move");
@@ -87,10 +99,15 @@ int run(const std::vector<std::string>& argv) {
           std::max(worst_shift_deg, (r.joints_deg - r.nominal_joints_deg).cwiseAbs().maxCoeff());
     }
   }
-  writeTextFileAtomic(out_path, formatCompensated(file, results, *format));
+  writeTextFileAtomic(out_path,
+                      formatCompensated(file, results, *format, compensator.approachDeg()));
   std::printf("%zu targets (%s form): %zu ok, %zu not ok; largest joint correction %.4f deg\n",
               results.size(), file.joints_form ? "joints" : "pose", results.size() - not_ok, not_ok,
               worst_shift_deg);
+  if (compensator.approachDeg() > 0)
+    std::printf("each target from a pre-point %.4g deg below it in every joint%s\n",
+                compensator.approachDeg(),
+                args.has("approach-deg") ? "" : " (as the calibration reached its points)");
   std::printf("wrote %s\n", out_path.c_str());
   return not_ok ? kExitSomeNotOk : 0;
 }

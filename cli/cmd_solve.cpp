@@ -43,6 +43,9 @@ no model and exits with 3, unless --allow-partial is given.
                           of the nominal and calibrated models against it
   --cell FILE             judge the predicted accuracy over this cell file's work_volume
                           (docs/compensation.md)              [the reference cell's]
+  --approach-deg D        the samples' points were each reached moving up by D deg in
+                          every joint (the plan's motion.approach_deg): recorded in the
+                          model, so that compensate reaches targets the same way  [0]
   --max-iterations N      LM iteration cap                                         [100]
   --json                  one JSON object instead of text
 
@@ -145,10 +148,10 @@ void printText(const FitAssessment& a, const Model& calibrated, size_t files) {
 }
 
 int run(const std::vector<std::string>& argv) {
-  const Args args(
-      argv,
-      {"model", "out", "validate", "report", "outlier-sigmas", "truth", "max-iterations", "cell"},
-      {"json", "drop-outliers", "allow-partial", "help"});
+  const Args args(argv,
+                  {"model", "out", "validate", "report", "outlier-sigmas", "truth",
+                   "max-iterations", "cell", "approach-deg"},
+                  {"json", "drop-outliers", "allow-partial", "help"});
   if (args.flag("help")) {
     std::fputs(kHelp, stdout);
     return 0;
@@ -163,6 +166,9 @@ int run(const std::vector<std::string>& argv) {
     origin.samples_files.push_back(std::filesystem::absolute(path).lexically_normal().string());
   }
   if (samples.empty()) throw UsageError("the samples files hold no samples");
+  origin.approach_deg = args.number("approach-deg", 0);
+  if (!(origin.approach_deg >= 0 && origin.approach_deg <= 1))
+    throw UsageError("--approach-deg must be 0 to 1 (deg)");
   AssessOptions options;
   options.outlier_sigmas = args.number("outlier-sigmas", options.outlier_sigmas);
   if (options.outlier_sigmas <= 0) throw UsageError("--outlier-sigmas must be positive");

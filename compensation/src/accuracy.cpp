@@ -78,7 +78,8 @@ AccuracyReport assessAccuracy(const Compensator& compensator,
   r.has_truth = truth != nullptr;
   std::optional<Kinematics> true_kin;
   if (truth) true_kin.emplace(truth->modelAt(1e6));  // warm
-  // Where the true robot's tool is at commanded readings.
+  // Where the true robot's tool is at commanded readings, reached as the target says (up in every
+  // joint from its pre-point; without one, up as well: one of the ways a program may come).
   const auto true_tool = [&](const JointsDeg& q) {
     return true_kin->toolPose(truth->effectiveReadings(q, kPositiveApproach));
   };

@@ -81,7 +81,9 @@ ojson accuracyJson(const AccuracyReport& r, bool per_pose) {
           {"config", armConfigName(t.config)},
           {"nominal_joints_deg",
            std::vector<double>(t.nominal_joints_deg.data(), t.nominal_joints_deg.data() + 6)},
-          {"joints_deg", std::vector<double>(t.joints_deg.data(), t.joints_deg.data() + 6)}};
+          {"joints_deg", std::vector<double>(t.joints_deg.data(), t.joints_deg.data() + 6)},
+          // each joint's direction into the target (1: up from its pre-point); null: none
+          {"approach", t.hasApproach() ? ojson(t.approach) : ojson(nullptr)}};
       if (!std::isnan(t.predicted_position_error_mm)) {
         one["predicted_position_error_mm"] = t.predicted_position_error_mm;
         one["predicted_orientation_error_deg"] = t.predicted_orientation_error_deg;

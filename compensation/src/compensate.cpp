@@ -60,7 +60,9 @@ Compensator::Compensator(const Model& nominal, const Model& calibrated, Compensa
     : nominal_(nominal),
       calibrated_(calibrated),
       options_(options),
-      tool_inverse_(options.tool.inverse()) {
+      tool_inverse_(options.tool.inverse()),
+      approach_deg_(options.approach_deg.value_or(
+          calibrated.provenance ? calibrated.provenance->approach_deg : 0.0)) {
   if (calibrated.covariance) {
     const Eigen::MatrixXd& c = *calibrated.covariance;
     for (int i = 0; i < kParamCount; ++i)
@@ -208,7 +210,25 @@ CompensatedTarget Compensator::solveCalibrated(CompensatedTarget t) const {
   t.predicted_position_error_mm = predictedPositionError(t.joints_deg);
   t.predicted_orientation_error_deg = predictedOrientationError(t.joints_deg);
   if (t.ok()) judgeCoverage(t);
+  if (t.hasJoints()) addApproach(t);
   return t;
+}
+
+void Compensator::addApproach(CompensatedTarget& t) const {
+  if (approach_deg_ <= 0) return;
+  t.approach.fill(1);
+  t.pre_point_deg = t.joints_deg.array() - approach_deg_;
+  for (int j = 0; j < kJointCount; ++j) {
+    const JointParams& joint = calibrated().joints[j];
+    if (t.pre_point_deg[j] >= joint.min_deg) continue;
+    std::ostringstream why;
+    why.precision(4);
+    why << "its approach pre-point puts joint " << j + 1 << " at " << t.pre_point_deg[j]
+        << " deg, below its limit " << joint.min_deg << " deg";
+    t.status = CompensationStatus::kOutsideLimits;
+    t.reason = why.str();
+    return;
+  }
 }
 
 void Compensator::judgeCoverage(CompensatedTarget& t) const {

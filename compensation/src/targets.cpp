@@ -140,13 +140,17 @@ std::optional<OutputFormat> parseOutputFormat(const std::string& word) {
 }
 
 std::string formatCompensated(const TargetFile& file, const std::vector<CompensatedTarget>& results,
-                              OutputFormat format) {
+                              OutputFormat format, double approach_deg) {
   std::string out;
   if (format == OutputFormat::kCsv) {
     if (file.has_names) out += "name,";
-    out += "j1,j2,j3,j4,j5,j6,predicted_error_mm,status,config,note\n";
+    out += "j1,j2,j3,j4,j5,j6,a1,a2,a3,a4,a5,a6,predicted_error_mm,status,config,note\n";
   } else {
     out += "; robocal compensate: corrected joint readings (deg) of " + file.source + "\n";
+    if (approach_deg > 0)
+      out += "; each target follows its approach pre-point, " + fixed(approach_deg, 4) +
+             " deg below it in every joint: reach the target from there, as the calibration "
+             "reached its points\n";
   }
   for (size_t i = 0; i < results.size(); ++i) {
     const CompensatedTarget& r = results[i];
@@ -157,6 +161,8 @@ std::string formatCompensated(const TargetFile& file, const std::vector<Compensa
     if (format == OutputFormat::kCsv) {
       if (file.has_names) out += name + ",";
       for (int j = 0; j < kJointCount; ++j) out += (joints ? fixed(r.joints_deg[j], 10) : "") + ",";
+      for (int j = 0; j < kJointCount; ++j)
+        out += (joints && r.hasApproach() ? std::to_string(r.approach[j]) : "") + ",";
       out += predicted + "," + compensationStatusName(r.status) + "," + armConfigName(r.config) +
              "," + csvText(r.reason) + "\n";
       continue;
@@ -168,10 +174,13 @@ std::string formatCompensated(const TargetFile& file, const std::vector<Compensa
     }
     if (r.status != CompensationStatus::kOk)
       out += "; " + label + ": " + compensationStatusName(r.status) + ": " + r.reason + "\n";
-    std::string point = "#PPOINT(";
-    for (int j = 0; j < kJointCount; ++j) point += (j ? ", " : "") + fixed(r.joints_deg[j], 4);
-    point += ")";
-    out += (format == OutputFormat::kVal2Moves ? "DO MOVE " : "") + point + "\n";
+    const auto point = [&](const JointsDeg& q) {
+      std::string text = format == OutputFormat::kVal2Moves ? "DO MOVE #PPOINT(" : "#PPOINT(";
+      for (int j = 0; j < kJointCount; ++j) text += (j ? ", " : "") + fixed(q[j], 4);
+      return text + ")\n";
+    };
+    if (r.hasApproach()) out += point(r.pre_point_deg);
+    out += point(r.joints_deg);
   }
   return out;
 }

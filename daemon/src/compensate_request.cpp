@@ -30,11 +30,16 @@ nlohmann::json compensateRequest(const ModelStore& models, const Model& nominal,
                                 armConfigName(r.config),
                                 r.reason,
                                 std::nullopt,
+                                std::nullopt,
                                 std::nullopt};
       if (r.hasJoints()) {
         std::array<double, 6> joints{};
         for (int j = 0; j < kJointCount; ++j) joints[j] = r.joints_deg[j];
         row.joints_deg = joints;
+        if (r.hasApproach()) {
+          for (int j = 0; j < kJointCount; ++j) joints[j] = r.pre_point_deg[j];
+          row.pre_point_joints_deg = joints;
+        }
       }
       if (!std::isnan(r.predicted_position_error_mm))
         row.predicted_error_mm = r.predicted_position_error_mm;

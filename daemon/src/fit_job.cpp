@@ -32,8 +32,8 @@ std::optional<Model> previousSetModel(const json& last_result, const std::string
 
 }  // namespace
 
-void FitJob::launch(RunDir dir, std::vector<Sample> samples, double set_extension_mm,
-                    int set_index) {
+void FitJob::launch(RunDir dir, std::vector<Sample> samples, double set_extension_mm, int set_index,
+                    double approach_deg) {
   wait();
   int previous_set = 0;
   const json last = shared_.with([](const RunData& d) { return d.last_result; });
@@ -54,7 +54,7 @@ void FitJob::launch(RunDir dir, std::vector<Sample> samples, double set_extensio
   }
   running_ =
       std::async(std::launch::async, [this, dir, fitted = std::move(fitted), set_extension_mm,
-                                      set_index, previous, previous_set]() mutable {
+                                      set_index, previous, previous_set, approach_deg]() mutable {
         try {
           AssessOptions options;  // robocal solve's defaults
           if (previous) {
@@ -69,7 +69,8 @@ void FitJob::launch(RunDir dir, std::vector<Sample> samples, double set_extensio
           const FitAssessment fit = assessFit(nominal_, std::move(fitted), options);
           const std::string name = "set" + std::to_string(set_index);
           const std::string model_file = dir.file("calibrated-" + name + ".json");
-          const Model calibrated = calibratedModel(fit, {dir.id(), {dir.file("samples.csv")}});
+          const Model calibrated =
+              calibratedModel(fit, {dir.id(), {dir.file("samples.csv")}, approach_deg});
           saveModelFile(model_file, calibrated);
           writeReport(dir.file("report-" + name), fit, calibrated);
           json result = fitSummaryJson(fit);

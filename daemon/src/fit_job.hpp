@@ -37,7 +37,9 @@ class FitJob {
   // Fits set `set_index` (its bar extension `set_extension_mm`) from the run's samples. `samples`
   // is what the run measured: the samples file is read back and fitted when it holds the same
   // number, so that the RESULT is `robocal solve --json` of that file.
-  void launch(RunDir dir, std::vector<Sample> samples, double set_extension_mm, int set_index);
+  // `approach_deg` is the plan's motion.approach_deg, recorded in the model.
+  void launch(RunDir dir, std::vector<Sample> samples, double set_extension_mm, int set_index,
+              double approach_deg);
   // A health check run's end: its samples judged against the active model (solver/health.hpp);
   // the verdict goes to the run folder (check.json), the event log, the model's history and the
   // clients (CHECK).

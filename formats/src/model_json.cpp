@@ -125,6 +125,9 @@ ModelProvenance provenanceFromJson(const Reader& r, const json& value) {
     }
     p.measured_joints_deg = ranges;
   }
+  p.approach_deg = r.optionalNumber(value, where, "approach_deg");
+  if (!(p.approach_deg >= 0 && p.approach_deg <= 1))
+    r.fail(where + ".approach_deg", "expected 0 to 1 (deg)");
   return p;
 }
 
@@ -152,6 +155,7 @@ nlohmann::ordered_json provenanceToJson(const ModelProvenance& p) {
     for (const auto& range : *p.measured_joints_deg) ranges.push_back({range[0], range[1]});
     out["measured_joints_deg"] = ranges;
   }
+  if (p.approach_deg > 0) out["approach_deg"] = p.approach_deg;
   return out;
 }
 

@@ -288,6 +288,7 @@ Model calibratedModel(const FitAssessment& fit, const FitOrigin& origin,
     p.measured_joints_deg = ranges;
   }
   p.samples_files = origin.samples_files;
+  p.approach_deg = origin.approach_deg;
   p.samples = fit.samples.size();
   p.rms_mm = fit.fit.after.rms_mm;
   p.rank = fit.fit.identifiability.rank;

@@ -582,13 +582,14 @@ Models parseObject<Models>(const json& j) {
 json toJson(const Compensated& o) {
   json rows = json::array();
   for (const CompensatedRow& t : o.targets)
-    rows.push_back({{"name", t.name},
-                    {"status", t.status},
-                    {"config", t.config},
-                    {"note", t.note},
-                    {"joints_deg", sixOrNull(t.joints_deg)},
-                    {"predicted_error_mm",
-                     t.predicted_error_mm ? json(*t.predicted_error_mm) : json(nullptr)}});
+    rows.push_back(
+        {{"name", t.name},
+         {"status", t.status},
+         {"config", t.config},
+         {"note", t.note},
+         {"joints_deg", sixOrNull(t.joints_deg)},
+         {"predicted_error_mm", t.predicted_error_mm ? json(*t.predicted_error_mm) : json(nullptr)},
+         {"pre_point_joints_deg", sixOrNull(t.pre_point_joints_deg)}});
   return {{"class", Compensated::kClass}, {"model", o.model}, {"targets", rows}};
 }
 template <>
@@ -608,6 +609,7 @@ Compensated parseObject<Compensated>(const json& j) {
     t.note = e.string("note");
     t.joints_deg = readSix(e, rows[i], "joints_deg");
     t.predicted_error_mm = e.optNumber("predicted_error_mm");
+    t.pre_point_joints_deg = readSix(e, rows[i], "pre_point_joints_deg");
     out.targets.push_back(std::move(t));
   }
   return out;

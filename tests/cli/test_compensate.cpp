@@ -5,6 +5,7 @@
 
 #include <robocal/formats/csv.hpp>
 
+#include <algorithm>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -43,7 +44,7 @@ TEST_CASE("[cli] robocal compensate returns a program's own joints when nothing 
   std::istringstream lines(out);
   std::string line;
   std::getline(lines, line);
-  CHECK(line == "name,j1,j2,j3,j4,j5,j6,predicted_error_mm,status,config,note");
+  CHECK(line == "name,j1,j2,j3,j4,j5,j6,a1,a2,a3,a4,a5,a6,predicted_error_mm,status,config,note");
   for (const char* row : rows) {
     REQUIRE(std::getline(lines, line));
     const auto got = robocal::csv::splitFields(line);
@@ -51,7 +52,8 @@ TEST_CASE("[cli] robocal compensate returns a program's own joints when nothing 
     CHECK(got[0] == want[0]);
     for (int j = 1; j <= 6; ++j)
       CHECK(std::abs(*robocal::csv::number(got[j]) - *robocal::csv::number(want[j])) < 1e-9);
-    CHECK(got[8] == "ok");
+    for (int j = 7; j <= 12; ++j) CHECK(got[j].empty());  // no approach recorded, none assumed
+    CHECK(got[14] == "ok");
   }
 }
 
@@ -85,6 +87,7 @@ TEST_CASE("[cli] robocal compensate and accuracy on a simulated calibration") {
     CHECK(compensated < nominal / 5);
     CHECK(j["predicted_position_error_mm"]["rms"].get<double>() > 0);
     CHECK(j["per_pose"].size() == 200);
+    CHECK(j["per_pose"][0]["approach"].is_null());  // none recorded, none assumed
     CHECK_THAT(readFile(dir / "map.svg"), Contains("<svg"));
   }
   SECTION("compensate writes VAL II points, and malformed rows are named") {
@@ -107,6 +110,32 @@ TEST_CASE("[cli] robocal compensate and accuracy on a simulated calibration") {
     CHECK(r.exit_code == 1);
     CHECK_THAT(r.output, Contains("bad.csv:2: expected 6 fields, got 5"));
     CHECK_FALSE(std::ifstream(dir / "never.csv").good());
+  }
+  SECTION("a calibration that approached its points from below reaches the targets so too") {
+    REQUIRE(runRobocal("solve --model " + kModel + " " + dir / "s.csv" + " --approach-deg 0.02" +
+                       " --out " + dir / "up.json")
+                .exit_code == 0);
+    CHECK(nlohmann::json::parse(readFile(dir / "up.json"))["provenance"]["approach_deg"] == 0.02);
+    writeFile(dir / "poses.csv",
+              "name,x_mm,y_mm,z_mm,rz_deg,ry_deg,rx_deg\nhome,0,0,250,0,135,0\n");
+    RunResult r = runRobocal("compensate --model " + dir / "up.json" + " --targets " +
+                             dir / "poses.csv" + " --out " + dir / "up.csv");
+    INFO(r.output);
+    CHECK_THAT(r.output, Contains("from a pre-point 0.02 deg below it in every joint (as the "
+                                  "calibration reached its points)"));
+    CHECK_THAT(readFile(dir / "up.csv"), Contains(",1,1,1,1,1,1,"));
+    r = runRobocal("compensate --model " + dir / "up.json" + " --targets " + dir / "poses.csv" +
+                   " --out " + dir / "up.val2" + " --format val2-move");
+    const std::string val2 = readFile(dir / "up.val2");
+    CHECK_THAT(val2, Contains("; each target follows its approach pre-point, 0.0200 deg below"));
+    CHECK(std::count(val2.begin(), val2.end(), '#') == 2);  // pre-point and target
+    r = runRobocal("accuracy --nominal " + kModel + " --calibrated " + dir / "up.json" +
+                   " --truth " + dir / "truth.json" + " --json");
+    const auto j = nlohmann::json::parse(r.output);
+    CHECK(j["per_pose"][0]["approach"] == nlohmann::json::array({1, 1, 1, 1, 1, 1}));
+    CHECK(runRobocal("solve --model " + kModel + " " + dir / "s.csv" + " --approach-deg 2" +
+                     " --out " + dir / "never.json")
+              .exit_code == 2);
   }
 }
 

@@ -229,8 +229,9 @@ TEST_CASE("the output never commands a target that cannot be reached") {
   REQUIRE(results[0].ok());
   REQUIRE(results[1].status == CompensationStatus::kUnreachable);
   const std::string csv = formatCompensated(file, results, OutputFormat::kCsv);
-  CHECK_THAT(csv, Contains("name,j1,j2,j3,j4,j5,j6,predicted_error_mm,status,config,note\n"));
-  CHECK_THAT(csv, Contains("\nfar,,,,,,,"));
+  CHECK_THAT(csv, Contains("name,j1,j2,j3,j4,j5,j6,a1,a2,a3,a4,a5,a6,predicted_error_mm,status,"
+                           "config,note\n"));
+  CHECK_THAT(csv, Contains("\nfar,,,,,,,,,,,,,"));
   CHECK_THAT(csv, Contains(",unreachable,"));
   const std::string moves = formatCompensated(file, results, OutputFormat::kVal2Moves);
   CHECK_THAT(moves, Contains("DO MOVE #PPOINT("));
@@ -238,6 +239,68 @@ TEST_CASE("the output never commands a target that cannot be reached") {
   CHECK(moves.find("DO MOVE") == moves.rfind("DO MOVE"));  // one move only
   const std::string points = formatCompensated(file, results, OutputFormat::kVal2Points);
   CHECK_THAT(points, Contains("\n#PPOINT("));
+}
+
+TEST_CASE("targets are reached as the calibration reached its points: up from a pre-point") {
+  const Model nominal = puma560NominalModel();
+  Model calibrated = perturbed(4);
+  const TargetFile file = parseTargets(
+      "name,x_mm,y_mm,z_mm,rz_deg,ry_deg,rx_deg\nnear,0,0,250,0,135,0\nfar,3000,0,0,0,0,0\n",
+      "t.csv");
+  const auto compensateAll = [&](const Compensator& comp) {
+    std::vector<CompensatedTarget> results;
+    for (const Target& t : file.targets) results.push_back(compensateTarget(comp, t));
+    return results;
+  };
+  // Without an approach recorded: none assumed, no pre-points, a1..a6 empty.
+  const Compensator plain(nominal, calibrated);
+  CHECK(plain.approachDeg() == 0);
+  const auto without = compensateAll(plain);
+  REQUIRE(without[0].ok());
+  CHECK_FALSE(without[0].hasApproach());
+  CHECK(formatCompensated(file, without, OutputFormat::kVal2Moves, 0).find("pre-point") ==
+        std::string::npos);
+
+  // The calibration's approach is recorded in the model, and survives its file.
+  ModelProvenance p;
+  p.approach_deg = 0.02;
+  calibrated.provenance = p;
+  calibrated = parseModel(formatModel(calibrated), "c.json");
+  REQUIRE(calibrated.provenance);
+  CHECK(calibrated.provenance->approach_deg == 0.02);
+  const Compensator comp(nominal, calibrated);
+  CHECK(comp.approachDeg() == 0.02);
+  const auto with = compensateAll(comp);
+  REQUIRE(with[0].ok());
+  CHECK(with[0].joints_deg == without[0].joints_deg);  // the target itself does not change
+  CHECK(with[0].approach == std::array<int, 6>{1, 1, 1, 1, 1, 1});
+  CHECK((with[0].joints_deg - with[0].pre_point_deg).maxCoeff() == Approx(0.02));
+  CHECK((with[0].joints_deg - with[0].pre_point_deg).minCoeff() == Approx(0.02));
+  CHECK_FALSE(with[1].hasApproach());  // unreachable: nothing to approach
+
+  const std::string csv = formatCompensated(file, with, OutputFormat::kCsv, comp.approachDeg());
+  CHECK_THAT(csv, Contains(",1,1,1,1,1,1,"));
+  const std::string moves =
+      formatCompensated(file, with, OutputFormat::kVal2Moves, comp.approachDeg());
+  CHECK_THAT(moves, Contains("pre-point, 0.0200 deg below it in every joint"));
+  // The pre-point's move, then the target's: two moves for the one reachable target.
+  const auto first = moves.find("DO MOVE #PPOINT(");
+  const auto second = moves.find("DO MOVE #PPOINT(", first + 1);
+  REQUIRE(second != std::string::npos);
+  CHECK(moves.find("DO MOVE #PPOINT(", second + 1) == std::string::npos);
+  char pre[32];
+  std::snprintf(pre, sizeof pre, "#PPOINT(%.4f,", with[0].pre_point_deg[0]);
+  CHECK(moves.find(pre) == first + 8);
+
+  // An explicit 0 turns it off; a pre-point below a joint's limit is refused, not commanded.
+  CompensationOptions off;
+  off.approach_deg = 0;
+  CHECK_FALSE(compensateAll(Compensator(nominal, calibrated, off))[0].hasApproach());
+  Model tight = calibrated;
+  for (int j = 0; j < kJointCount; ++j) tight.joints[j].min_deg = with[0].joints_deg[j] - 0.01;
+  const auto limited = compensateAll(Compensator(nominal, tight));
+  CHECK(limited[0].status == CompensationStatus::kOutsideLimits);
+  CHECK_THAT(limited[0].reason, Contains("approach pre-point puts joint 1"));
 }
 
 TEST_CASE("a calibrated model's covariance survives its file, and a bad one is refused") {

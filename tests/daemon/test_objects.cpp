@@ -87,8 +87,10 @@ Models fullModels() {
 }
 Compensated fullCompensated() {
   return {3,
-          {{"p1", "ok", "right-up-noflip", "", std::array<double, 6>{1, 2, 3, 4, 5, 6}, 0.05},
-           {"p2", "unreachable", "right-up-noflip", "out of reach", std::nullopt, std::nullopt}}};
+          {{"p1", "ok", "right-up-noflip", "", std::array<double, 6>{1, 2, 3, 4, 5, 6}, 0.05,
+            std::array<double, 6>{0.98, 1.98, 2.98, 3.98, 4.98, 5.98}},
+           {"p2", "unreachable", "right-up-noflip", "out of reach", std::nullopt, std::nullopt,
+            std::nullopt}}};
 }
 Check fullCheck() {
   return {true,

@@ -18,6 +18,7 @@
 #include <robocal/kinematics/model.hpp>
 #include <robocal/planner/puma_ik.hpp>
 
+#include <array>
 #include <optional>
 #include <string>
 
@@ -57,6 +58,10 @@ struct CompensationOptions {
   double shoulder_singularity_mm = 20.0;
   // A joint this far outside the range the calibration measured it over is outside_measured.
   double measured_margin_deg = 2.0;
+  // Each target is reached from a pre-point this far below it in every joint, as the calibration
+  // reached its points (backlash then sits on the side the joint offsets hold); 0: no approach.
+  // Unset: the calibrated model's (its provenance's approach_deg).
+  std::optional<double> approach_deg;
 };
 
 struct CompensatedTarget {
@@ -72,6 +77,11 @@ struct CompensatedTarget {
   double predicted_orientation_error_deg = 0;
   double position_residual_mm = 0;  // |calibrated tool pose - target| at joints_deg
   double angle_residual_deg = 0;
+  // Each joint's direction into the target: +1 up from the pre-point, 0 when no approach is
+  // assumed (CompensationOptions::approach_deg 0).
+  std::array<int, kJointCount> approach{};
+  JointsDeg pre_point_deg = JointsDeg::Zero();  // where the approach starts, when it is assumed
+  bool hasApproach() const { return approach[0] != 0; }
   bool ok() const { return status == CompensationStatus::kOk; }
   // Reached in the calibrated model, inside the limits, away from singularities: ok, or ok but
   // where the calibration says little (outside_measured, no_gain). Work volumes and accuracy
@@ -96,6 +106,8 @@ class Compensator {
   const Model& nominal() const { return nominal_.model(); }
   const Model& calibrated() const { return calibrated_.model(); }
   const CompensationOptions& options() const { return options_; }
+  // The pre-point step in effect (options, else the calibrated model's), deg; 0: none.
+  double approachDeg() const { return approach_deg_; }
 
   // A desired tool pose in the world frame, in `config`; without one, the first of the eight
   // configurations (armConfigFromIndex order) whose nominal solution is within the limits and
@@ -121,12 +133,15 @@ class Compensator {
   // An ok target outside the calibration's measured joint ranges, or where its predicted error
   // exceeds its correction, gets the status that says so.
   void judgeCoverage(CompensatedTarget& t) const;
+  // A target with readings gets its approach pre-point, checked against the joint limits.
+  void addApproach(CompensatedTarget& t) const;
   // The status a solution gets from PumaIk's status and the singularity margins.
   CompensationStatus classify(const PumaIk& ik, const IkSolution& s, std::string& reason) const;
 
   PumaIk nominal_, calibrated_;
   CompensationOptions options_;
   Eigen::Isometry3d tool_inverse_;
+  double approach_deg_ = 0;
   // The covariance restricted to the estimated parameters, and their indices.
   std::vector<int> estimated_;
   Eigen::MatrixXd covariance_;

@@ -2,7 +2,7 @@
 // - the targets CSV, in one of two forms found by its header: desired tool poses
 //   (x_mm,y_mm,z_mm,rz_deg,ry_deg,rx_deg, optional config) or a program's nominal joints
 //   (j1..j6, controller readings in deg); both take an optional name column;
-// - the output: CSV (name, j1..j6, predicted_error_mm, status, then config and note), or VAL II
+// - the output: CSV (name, j1..j6, a1..a6, predicted_error_mm, status, config, note), or VAL II
 //   precision points, `#PPOINT(j1, ..., j6)` or `DO MOVE #PPOINT(...)` lines.
 // Malformed rows are FormatError naming file:line and the problem.
 #pragma once
@@ -43,7 +43,10 @@ std::optional<OutputFormat> parseOutputFormat(const std::string& word);
 
 // The output text. Rows whose status is unreachable or outside_limits carry no joints (CSV: empty
 // j1..j6; VAL II: a `;` comment line), so that nothing that cannot be reached is ever commanded.
+// With an approach (`approach_deg` > 0, Compensator::approachDeg), CSV rows carry each joint's
+// direction into the target (a1..a6, +1: up), and the VAL II outputs put the pre-point before
+// each target (a header comment says so).
 std::string formatCompensated(const TargetFile& file, const std::vector<CompensatedTarget>& results,
-                              OutputFormat format);
+                              OutputFormat format, double approach_deg = 0);
 
 }  // namespace robocal

@@ -37,6 +37,7 @@ const char* robocalVersion();
 struct FitOrigin {
   std::string run_id;  // the robocald run, "" for robocal solve
   std::vector<std::string> samples_files;
+  double approach_deg = 0;  // the plan's motion.approach_deg (ModelProvenance::approach_deg)
 };
 
 // The model to write: the fitted parameters named "<nominal name> calibrated <YYYY-MM-DD>" (UTC)

@@ -64,6 +64,10 @@ struct ModelProvenance {
   // The range of each joint's readings over the fitted samples, {min, max} in deg: where the
   // model was measured. Compensation flags targets outside it. Absent from older files.
   std::optional<std::array<std::array<double, 2>, kJointCount>> measured_joints_deg;
+  // Every fitted point was reached moving up by this much in each joint (the plan's
+  // motion.approach_deg), so the joint offsets hold the backlash of that side: compensate writes
+  // its targets the same way. 0: the points were reached from either side (older files too).
+  double approach_deg = 0;
 };
 
 struct Model {

@@ -244,6 +244,9 @@ struct CompensatedRow {
   std::string note;
   std::optional<std::array<double, 6>> joints_deg;
   std::optional<double> predicted_error_mm;
+  // Where to come from: the approach pre-point, below the target in every joint, when the
+  // calibration reached its points that way (docs/compensation.md, "The approach").
+  std::optional<std::array<double, 6>> pre_point_joints_deg;
   bool operator==(const CompensatedRow&) const = default;
 };
 struct Compensated {
