@@ -98,8 +98,12 @@ int run(const std::vector<std::string>& argv) {
   // A calibration plan's accuracy where the user works (a check plan is not fitted).
   const double predicted_mm =
       check ? -1 : predictedWorkVolumeError(model, plan, work_joints, design.noise_sigma_mm);
+  const std::vector<JointsDeg> whole_joints = wholeRangeJoints(model);
+  const double whole_mm =
+      check ? -1 : predictedWorkVolumeError(model, plan, whole_joints, design.noise_sigma_mm);
   if (std::isfinite(predicted_mm)) {
     plan.summary.predicted_work_volume_error_mm = predicted_mm;
+    if (std::isfinite(whole_mm)) plan.summary.predicted_whole_range_error_mm = whole_mm;
     plan.summary.noise_sigma_mm = design.noise_sigma_mm;
   }
 
@@ -198,6 +202,12 @@ int run(const std::vector<std::string>& argv) {
         "mm, %zu poses); cell time %.1f min: robot %.1f min, %d bar swaps %.1f min\n",
         predicted_mm, design.noise_sigma_mm, work_joints.size(), sum.cell_time_s / 60.0,
         sum.duration_s / 60.0, sum.shells, sum.swap_time_s / 60.0);
+  if (!check)
+    std::printf(
+        "whole range: predicted RMS tool position error %.4f mm after the fit over %zu joint "
+        "vectors within the arm's limits (%.1fx the work volume's: what this plan does not "
+        "cover)\n",
+        whole_mm, whole_joints.size(), whole_mm / predicted_mm);
   if (optimal)
     std::printf("optimal: %d points chosen from %d candidates in %d round%s%s\n", sum.points,
                 design_report.candidates, design_report.rounds,

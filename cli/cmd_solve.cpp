@@ -195,17 +195,12 @@ int run(const std::vector<std::string>& argv) {
   // Where the user works: the predicted error over the work volume (robocald's RESULT has the
   // same, from the same code).
   nlohmann::ordered_json summary = fitSummaryJson(fit);
-  std::string work_text;
-  try {
-    const AccuracyReport work = predictedWorkVolumeAccuracy(
-        Compensator(nominal, calibrated), cell.work_volume, "the cell's work_volume");
-    summary["work_volume"] = accuracyJson(work);
-    work_text = accuracyText(work);
-    if (args.has("report")) writeWorkVolumeReport(args.get("report", ""), work);
-  } catch (const std::exception& e) {
-    summary["work_volume"] = {{"error", e.what()}};
-    work_text = std::string("work-volume accuracy: ") + e.what() + "\n";
-  }
+  // And beyond it, over the arm's whole range: what the calibration does not cover.
+  const PredictedAccuracy accuracy =
+      predictedAccuracy(nominal, calibrated, cell.work_volume, args.get("report", ""));
+  summary["work_volume"] = accuracy.work_volume;
+  summary["whole_range"] = accuracy.whole_range;
+  const std::string& work_text = accuracy.text;
 
   if (args.flag("json")) {
     std::printf("%s\n", summary.dump().c_str());

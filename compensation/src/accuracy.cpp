@@ -1,6 +1,7 @@
 #include <robocal/compensation/accuracy.hpp>
 
 #include <robocal/kinematics/kinematics.hpp>
+#include <robocal/kinematics/units.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -40,7 +41,28 @@ std::vector<std::pair<Eigen::Isometry3d, CompensatedTarget>> drawWorkVolume(
   return poses;
 }
 
+// Compensates targets 0..count-1 (`target_at`) and gathers the statistics over those solved.
+AccuracyReport assess(const Compensator& compensator, std::size_t count,
+                      const std::function<CompensatedTarget(std::size_t)>& target_at,
+                      const TrueRobot* truth);
+
 }  // namespace
+
+std::vector<JointsDeg> wholeRangeJoints(const Model& model, std::size_t count, std::uint64_t seed) {
+  constexpr double kWristMarginDeg = 5;
+  std::mt19937_64 rng(seed);
+  std::vector<JointsDeg> out;
+  out.reserve(count);
+  while (out.size() < count) {
+    JointsDeg q;
+    for (int j = 0; j < kJointCount; ++j)
+      q[j] = std::uniform_real_distribution<double>(model.joints[j].min_deg,
+                                                    model.joints[j].max_deg)(rng);
+    if (std::abs(std::sin(q[4] * kRadPerDeg)) < std::sin(kWristMarginDeg * kRadPerDeg)) continue;
+    out.push_back(q);
+  }
+  return out;
+}
 
 std::vector<Eigen::Isometry3d> workVolumePoses(const WorkVolume& work,
                                                const Compensator& compensator) {
@@ -73,8 +95,26 @@ ErrorStats errorStats(std::vector<double> values) {
 AccuracyReport assessAccuracy(const Compensator& compensator,
                               const std::vector<Eigen::Isometry3d>& targets,
                               const TrueRobot* truth) {
+  return assess(
+      compensator, targets.size(), [&](std::size_t i) { return compensator.forPose(targets[i]); },
+      truth);
+}
+
+AccuracyReport assessAccuracyAtJoints(const Compensator& compensator,
+                                      const std::vector<JointsDeg>& nominal_joints_deg,
+                                      const TrueRobot* truth) {
+  return assess(
+      compensator, nominal_joints_deg.size(),
+      [&](std::size_t i) { return compensator.forNominalJoints(nominal_joints_deg[i]); }, truth);
+}
+
+namespace {
+
+AccuracyReport assess(const Compensator& compensator, std::size_t count,
+                      const std::function<CompensatedTarget(std::size_t)>& target_at,
+                      const TrueRobot* truth) {
   AccuracyReport r;
-  r.requested = targets.size();
+  r.requested = count;
   r.has_truth = truth != nullptr;
   std::optional<Kinematics> true_kin;
   if (truth) true_kin.emplace(truth->modelAt(1e6));  // warm
@@ -86,9 +126,10 @@ AccuracyReport assessAccuracy(const Compensator& compensator,
   const Eigen::Isometry3d& tool = compensator.options().tool;
   std::vector<double> pred_pos, pred_ori, nom_pos, nom_ori, comp_pos, comp_ori, model_pos,
       model_ori;
-  for (const Eigen::Isometry3d& pose : targets) {
+  for (std::size_t i = 0; i < count; ++i) {
     PoseAccuracy a;
-    a.target = compensator.forPose(pose);
+    a.target = target_at(i);
+    const Eigen::Isometry3d& pose = a.target.target;
     if (true_kin) {
       const Eigen::Isometry3d at_nominal = true_tool(a.target.nominal_joints_deg) * tool;
       const Eigen::Isometry3d at_compensated = true_tool(a.target.joints_deg) * tool;
@@ -125,5 +166,7 @@ AccuracyReport assessAccuracy(const Compensator& compensator,
   }
   return r;
 }
+
+}  // namespace
 
 }  // namespace robocal

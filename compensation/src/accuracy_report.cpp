@@ -100,7 +100,7 @@ ojson accuracyJson(const AccuracyReport& r, bool per_pose) {
 }
 
 std::string accuracyText(const AccuracyReport& r) {
-  std::string out = "work-volume accuracy over " + std::to_string(r.solved) + " of " +
+  std::string out = "accuracy over " + std::to_string(r.solved) + " of " +
                     std::to_string(r.requested) + " target poses (" + r.poses_from + ")";
   out += r.solved < r.requested ? "; the others could not be compensated\n" : "\n";
   if (r.ok < r.solved)
@@ -125,9 +125,14 @@ std::string accuracyText(const AccuracyReport& r) {
                      "deg", 5);
     out += statsLine(
         "commanded with compensated joints, orientation:", r.compensated_orientation_deg, "deg", 5);
-    if (r.compensated_position_mm.rms > 0)
-      out += fmt("  compensation makes the RMS position error %.1fx smaller\n",
-                 r.nominal_position_mm.rms / r.compensated_position_mm.rms);
+    const double gain = r.nominal_position_mm.rms / r.compensated_position_mm.rms;
+    if (r.compensated_position_mm.rms > 0 && gain >= 1)
+      out += fmt("  compensation makes the RMS position error %.1fx smaller\n", gain);
+    else if (r.compensated_position_mm.rms > 0)
+      out +=
+          fmt("  compensation makes the RMS position error %.1fx LARGER here: the calibration does "
+              "not cover these poses\n",
+              1 / gain);
   }
   return out;
 }
@@ -224,6 +229,40 @@ AccuracyReport predictedWorkVolumeAccuracy(const Compensator& compensator, const
   AccuracyReport report = assessAccuracy(compensator, workVolumePoses(work, compensator));
   report.poses_from = poses_from;
   return report;
+}
+
+AccuracyReport predictedWholeRangeAccuracy(const Compensator& compensator) {
+  const std::vector<JointsDeg> joints = wholeRangeJoints(compensator.calibrated());
+  AccuracyReport report = assessAccuracyAtJoints(compensator, joints);
+  report.poses_from = "the arm's whole range: " + std::to_string(joints.size()) +
+                      " joint vectors within its limits";
+  return report;
+}
+
+PredictedAccuracy predictedAccuracy(const Model& nominal, const Model& calibrated,
+                                    const WorkVolume& work, const std::string& report_dir) {
+  PredictedAccuracy out;
+  try {
+    const Compensator compensator(nominal, calibrated);
+    try {
+      const AccuracyReport volume =
+          predictedWorkVolumeAccuracy(compensator, work, "the cell's work_volume");
+      out.work_volume = accuracyJson(volume);
+      out.text = accuracyText(volume);
+      out.work_volume_rms_mm = volume.predicted_position_mm.rms;
+      if (!report_dir.empty()) writeWorkVolumeReport(report_dir, volume);
+    } catch (const std::invalid_argument& e) {  // the volume is out of reach
+      out.work_volume = {{"error", e.what()}};
+      out.text = std::string("work-volume accuracy: ") + e.what() + "\n";
+    }
+    const AccuracyReport whole = predictedWholeRangeAccuracy(compensator);
+    out.whole_range = accuracyJson(whole);
+    out.text += accuracyText(whole);
+  } catch (const std::invalid_argument& e) {  // a model compensation cannot use
+    out.work_volume = out.whole_range = {{"error", e.what()}};
+    out.text = std::string("accuracy: ") + e.what() + "\n";
+  }
+  return out;
 }
 
 void writeWorkVolumeReport(const std::string& dir, const AccuracyReport& report) {

@@ -75,16 +75,14 @@ void FitJob::launch(RunDir dir, std::vector<Sample> samples, double set_extensio
           writeReport(dir.file("report-" + name), fit, calibrated);
           json result = fitSummaryJson(fit);
           proto::ModelEntry entry;
-          try {  // where the user works; a fit is still a fit without it
-            const AccuracyReport work = predictedWorkVolumeAccuracy(
-                Compensator(nominal_, calibrated), work_volume_, "the cell's work_volume");
-            writeWorkVolumeReport(dir.file("report-" + name), work);
-            result["work_volume"] = accuracyJson(work);
-            entry.work_volume_error_mm = work.predicted_position_mm.rms;
-          } catch (const std::exception& e) {
-            spdlog::warn("set {}: no work-volume accuracy: {}", set_index, e.what());
-            result["work_volume"] = {{"error", e.what()}};
-          }
+          // Where the user works and beyond; a fit is still a fit without them.
+          const PredictedAccuracy accuracy =
+              predictedAccuracy(nominal_, calibrated, work_volume_, dir.file("report-" + name));
+          result["work_volume"] = accuracy.work_volume;
+          result["whole_range"] = accuracy.whole_range;
+          entry.work_volume_error_mm = accuracy.work_volume_rms_mm;
+          if (!accuracy.work_volume_rms_mm)
+            spdlog::warn("set {}: no work-volume accuracy: {}", set_index, accuracy.text);
           entry.date_utc = calibrated.provenance ? calibrated.provenance->date_utc : "";
           entry.run = dir.id();
           entry.set = set_index;

@@ -112,6 +112,8 @@ ordered_json planToJson(const Plan& plan) {
   }
   if (s.predicted_work_volume_error_mm >= 0) {
     summary["predicted_work_volume_error_mm"] = tidy(s.predicted_work_volume_error_mm);
+    if (s.predicted_whole_range_error_mm >= 0)
+      summary["predicted_whole_range_error_mm"] = tidy(s.predicted_whole_range_error_mm);
     summary["noise_sigma_mm"] = tidy(s.noise_sigma_mm);
   }
   j["summary"] = summary;
@@ -247,6 +249,7 @@ Plan planFromJson(const json& root, const std::string& source) {
     plan.summary.expected_rank = r.count(s, "summary", "expected_rank", 36);
     plan.summary.condition_number = s.value("condition_number", 0.0);
     plan.summary.predicted_work_volume_error_mm = s.value("predicted_work_volume_error_mm", -1.0);
+    plan.summary.predicted_whole_range_error_mm = s.value("predicted_whole_range_error_mm", -1.0);
     plan.summary.noise_sigma_mm = s.value("noise_sigma_mm", 0.0);
   }
   return plan;

@@ -88,6 +88,18 @@ TEST_CASE("[cli] robocal compensate and accuracy on a simulated calibration") {
     CHECK(j["predicted_position_error_mm"]["rms"].get<double>() > 0);
     CHECK(j["per_pose"].size() == 200);
     CHECK(j["per_pose"][0]["approach"].is_null());  // none recorded, none assumed
+    // Beyond the work volume: the whole range, with the truth, and the options exclusive.
+    const RunResult whole =
+        runRobocal("accuracy --nominal " + kModel + " --calibrated " + dir / "cal.json" +
+                   " --truth " + dir / "truth.json" + " --whole-range 30 --json");
+    REQUIRE(whole.exit_code == 0);
+    const auto w = nlohmann::json::parse(whole.output);
+    CHECK_THAT(w["poses_from"].get<std::string>(), Contains("whole range: 30 joint vectors"));
+    CHECK(w["per_pose"].size() == 30);
+    CHECK(w["compensated_commanded_position_error_mm"]["rms"].get<double>() > compensated);
+    CHECK(runRobocal("accuracy --calibrated " + dir / "cal.json" + " --whole-range 30 --cell " +
+                     ROBOCAL_SOURCE_DIR "/config/cell.json")
+              .exit_code == 2);
     CHECK_THAT(readFile(dir / "map.svg"), Contains("<svg"));
   }
   SECTION("compensate writes VAL II points, and malformed rows are named") {

@@ -156,6 +156,44 @@ TEST_CASE("over the work volume, compensation makes a simulated robot at least 1
   CHECK_THAT(svg, Contains("x (mm)"));
 }
 
+TEST_CASE("beyond the work volume: the arm's whole range, predicted and true, side by side") {
+  const Model nominal = puma560NominalModel();
+  const auto joints = wholeRangeJoints(nominal, 300, 5);
+  REQUIRE(joints.size() == 300);
+  CHECK(joints == wholeRangeJoints(nominal, 300, 5));  // a seed draws the same vectors
+  double lowest_j1 = 1e9, highest_j1 = -1e9;
+  for (const JointsDeg& q : joints) {
+    for (int j = 0; j < kJointCount; ++j) {
+      CHECK(q[j] >= nominal.joints[j].min_deg);
+      CHECK(q[j] <= nominal.joints[j].max_deg);
+    }
+    CHECK(std::abs(std::sin(q[4] * M_PI / 180)) >= std::sin(5 * M_PI / 180) - 1e-12);
+    lowest_j1 = std::min(lowest_j1, q[0]);
+    highest_j1 = std::max(highest_j1, q[0]);
+  }
+  CHECK(highest_j1 - lowest_j1 > 0.8 * (nominal.joints[0].max_deg - nominal.joints[0].min_deg));
+
+  // A calibration on the reference shells: well predicted and well compensated where it measured,
+  // less so over the whole range, and the statistics say so.
+  const Model truth = perturbed(11);
+  const Model calibrated = calibrate(nominal, truth, 11);
+  const Compensator comp(nominal, calibrated);
+  const PredictedAccuracy predicted = predictedAccuracy(nominal, calibrated, WorkVolume{});
+  REQUIRE(predicted.work_volume_rms_mm);
+  const double whole_mm = predicted.whole_range["predicted_position_error_mm"]["rms"];
+  CHECK(whole_mm > 2 * *predicted.work_volume_rms_mm);
+  CHECK_THAT(predicted.text, Contains("the arm's whole range: 200 joint vectors"));
+  const TrueRobot true_robot{truth, Realism::ideal()};
+  const AccuracyReport at_joints =
+      assessAccuracyAtJoints(comp, wholeRangeJoints(nominal, 60, 2), &true_robot);
+  CHECK(at_joints.solved > 40);
+  CHECK(at_joints.compensated_position_mm.rms < at_joints.nominal_position_mm.rms);
+  // Each target is where the nominal model puts the drawn joints.
+  const PoseDifference d = poseDifference(
+      at_joints.poses[0].target.target, comp.nominalToolPose(wholeRangeJoints(nominal, 60, 2)[0]));
+  CHECK(d.position_mm < 1e-9);
+}
+
 TEST_CASE("a work volume out of the arm's reach is refused, not looped on") {
   const Model nominal = puma560NominalModel();
   const Compensator comp(nominal, nominal);

@@ -8,6 +8,8 @@
 #include <robocal/planner/cell.hpp>
 #include <robocal/sim/true_robot.hpp>
 
+#include <cstdint>
+#include <functional>
 #include <optional>
 #include <vector>
 
@@ -23,6 +25,13 @@ std::vector<Eigen::Isometry3d> workVolumePoses(const WorkVolume& work,
 // The same poses' compensated joints (with Compensator(nominal, nominal): the nominal joints, as
 // an off-line program or the plan's work-volume objective has them).
 std::vector<JointsDeg> workVolumeJoints(const WorkVolume& work, const Compensator& compensator);
+
+// The arm's whole range, beside the declared work volume: `count` joint vectors drawn uniformly
+// within the model's joint limits with `seed`, joint 5 at least 5 deg from its singularity. What
+// a calibration measured on a few shells says little about most of them: a prediction over these
+// shows what it does not cover (docs/accuracy.md).
+std::vector<JointsDeg> wholeRangeJoints(const Model& model, std::size_t count = 200,
+                                        std::uint64_t seed = 1);
 
 struct ErrorStats {
   size_t count = 0;
@@ -63,5 +72,10 @@ struct AccuracyReport {
 AccuracyReport assessAccuracy(const Compensator& compensator,
                               const std::vector<Eigen::Isometry3d>& targets,
                               const TrueRobot* truth = nullptr);
+// The same for a program's nominal joints (Compensator::forNominalJoints): each target is the
+// pose the nominal model puts there, in that configuration.
+AccuracyReport assessAccuracyAtJoints(const Compensator& compensator,
+                                      const std::vector<JointsDeg>& nominal_joints_deg,
+                                      const TrueRobot* truth = nullptr);
 
 }  // namespace robocal

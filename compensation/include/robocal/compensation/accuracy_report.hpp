@@ -6,6 +6,7 @@
 #include <robocal/compensation/accuracy.hpp>
 
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 
 namespace robocal {
@@ -30,6 +31,23 @@ std::string accuracySvg(const AccuracyReport& report);
 // Throws std::invalid_argument when the volume is out of reach (workVolumePoses).
 AccuracyReport predictedWorkVolumeAccuracy(const Compensator& compensator, const WorkVolume& work,
                                            const std::string& poses_from);
+
+// The predicted error over the arm's whole range (wholeRangeJoints of the calibrated model), beside
+// the work volume's.
+AccuracyReport predictedWholeRangeAccuracy(const Compensator& compensator);
+
+// A fit's predicted accuracy where the user works and beyond it, as `robocal solve` and robocald's
+// RESULT report it, from the same code: JSON for the "work_volume" and "whole_range" keys
+// ({"error": ...} when one cannot be computed: a volume out of reach, a model compensation cannot
+// use), the text for a terminal, and the work volume's RMS. With `report_dir`, the work volume's
+// report files go there (writeWorkVolumeReport).
+struct PredictedAccuracy {
+  nlohmann::ordered_json work_volume, whole_range;
+  std::string text;
+  std::optional<double> work_volume_rms_mm;
+};
+PredictedAccuracy predictedAccuracy(const Model& nominal, const Model& calibrated,
+                                    const WorkVolume& work, const std::string& report_dir = "");
 
 // Writes DIR/work_volume.json (accuracyJson with every pose) and DIR/work_volume.svg.
 void writeWorkVolumeReport(const std::string& dir, const AccuracyReport& report);

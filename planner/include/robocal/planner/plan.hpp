@@ -91,6 +91,8 @@ struct PlanSummary {
   // Predicted RMS tool position error over the cell's work volume after the fit (design.hpp),
   // for the bar noise below; < 0: not computed.
   double predicted_work_volume_error_mm = -1;
+  // The same over the arm's whole range (joint vectors within its limits), beside it.
+  double predicted_whole_range_error_mm = -1;
   double noise_sigma_mm = 0;
 };
 
