@@ -324,6 +324,11 @@ RunContext::Measurement RunContext::measureHere(double window_s) {
   }
   m.deflection_mm = sum / static_cast<double>(window_.size());
   m.spread_mm = hi - lo;
+  if (window_.size() > 1) {
+    double squares = 0;
+    for (double v : window_) squares += (v - m.deflection_mm) * (v - m.deflection_mm);
+    m.noise_mm = std::sqrt(squares / static_cast<double>(window_.size() - 1));
+  }
   m.readings = window_.size();
   return m;
 }

@@ -119,7 +119,9 @@ class RunContext {
 
   struct Measurement {
     JointsDeg joints_deg;
-    double deflection_mm = 0, spread_mm = 0;
+    double deflection_mm = 0;
+    double spread_mm = 0;  // max - min of the window's readings (grows with their number)
+    double noise_mm = 0;   // their standard deviation (0 with one reading): the bar's noise
     std::size_t readings = 0;
     Clock::time_point bar_window_start, where_end;
   };

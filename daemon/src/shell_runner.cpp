@@ -484,7 +484,7 @@ JointsDeg ShellRunner::recordPoint(const ShellPlan& planned, const PlanStep& ste
                            std::chrono::duration<double>(now - pace_mark_).count());
   pace_mark_ = now;
   progress();
-  if (const std::string suspect = shell_watch_.point(m.deflection_mm, m.spread_mm);
+  if (const std::string suspect = shell_watch_.point(m.deflection_mm, m.noise_mm);
       !suspect.empty()) {
     const Connection& c = planned.connection;
     throw StopRun{StopRun::kFault, "shell " + std::to_string(planned.shell) + " " +

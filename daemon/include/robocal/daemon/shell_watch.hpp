@@ -1,17 +1,19 @@
 // Watches the data points of a run for a connection that goes bad while a shell is measured (a
 // ball working loose in its socket, a bar knocked in its chuck). Each point brings its bar
-// deflection (the refined model's error there: the points are planned with it) and the spread of
-// the readings in its window. A shell whose recent points jump well above what the run has seen
-// so far is suspect: its last kPoints points are compared, as medians, with all earlier points.
-// A deflection is judged only past the run's re-centring threshold (the soft limit, where a move
-// stops and the ball is moved back along the bar): below it a deflection is the model's ordinary
-// error, which the centring corrects as it goes, and a shell may start anywhere up to it (a floor
-// of 0.3 mm paused ordinary runs whose shells sat at 0.45 mm). A loose ball shows first in the
-// spread of the readings at a point, which is judged from kFloorSpreadMm and at kSpreadJump times
-// the earlier points': a loose ball's play of 0.25 mm (1 sigma) beside a bar's noise of 0.06 mm
-// raised the median spread 3-4x, not the 5x the deflection needs (scripts/pause-seeds.sh), while
-// an ordinary shell's median of five stays within 2x of the run's.
-// Pure decision, no I/O: the run feeds it and pauses on a problem.
+// deflection (the refined model's error there: the points are planned with it) and the noise of
+// the readings in its window: their standard deviation, not their range, which grows with their
+// number (a window of the main job caught more readings while the machine was busy, and the
+// median range of a shell went 2.5x the run's: a pause for nothing). A shell whose recent points
+// jump well above what the run has seen so far is suspect: its last kPoints points are compared, as
+// medians, with all earlier points. A deflection is judged only past the run's re-centring
+// threshold (the soft limit, where a move stops and the ball is moved back along the bar): below it
+// a deflection is the model's ordinary error, which the centring corrects as it goes, and a shell
+// may start anywhere up to it (a floor of 0.3 mm paused ordinary runs whose shells sat at 0.45 mm).
+// A loose ball shows first in the noise of the readings at a point, which is judged from
+// kFloorNoiseMm and at kSpreadJump times the earlier points': a loose ball's play of 0.25 mm (1
+// sigma) beside a bar's noise of 0.06 mm raised the median spread 3-4x, not the 5x the deflection
+// needs (scripts/pause-seeds.sh), while an ordinary shell's median of five stays within 2x of the
+// run's. Pure decision, no I/O: the run feeds it and pauses on a problem.
 #pragma once
 
 #include <algorithm>
@@ -27,8 +29,8 @@ class ShellWatch {
   static constexpr std::size_t kPoints = 5;           // recent points judged together
   static constexpr std::size_t kBaselinePoints = 10;  // earlier points needed to judge at all
   static constexpr double kJump = 5.0;        // recent median deflection over the earlier points'
-  static constexpr double kSpreadJump = 2.5;  // the same for the spread of the readings
-  static constexpr double kFloorSpreadMm = 0.05;
+  static constexpr double kSpreadJump = 2.5;  // the same for the noise of the readings
+  static constexpr double kFloorNoiseMm = 0.03;
 
   // `recentre_mm`: the deflection past which the run re-centres the bar (its soft limit).
   explicit ShellWatch(double recentre_mm) : floor_deflection_mm_(recentre_mm) {}
@@ -41,9 +43,9 @@ class ShellWatch {
   }
 
   // "" while the shell looks like the rest of the run; otherwise what jumped and by how much.
-  std::string point(double deflection_mm, double spread_mm) {
+  std::string point(double deflection_mm, double noise_mm) {
     shell_deflections_.push_back(std::abs(deflection_mm));
-    shell_spreads_.push_back(spread_mm);
+    shell_spreads_.push_back(noise_mm);
     if (shell_deflections_.size() < kPoints || baseline_deflections_.size() < kBaselinePoints)
       return {};
     const auto judge = [](const std::vector<double>& recent_all, const std::vector<double>& base,
@@ -58,7 +60,7 @@ class ShellWatch {
       return buf;
     };
     std::string problem =
-        judge(shell_spreads_, baseline_spreads_, kFloorSpreadMm, kSpreadJump, "reading spread");
+        judge(shell_spreads_, baseline_spreads_, kFloorNoiseMm, kSpreadJump, "reading noise");
     if (problem.empty())
       problem = judge(shell_deflections_, baseline_deflections_, floor_deflection_mm_, kJump,
                       "deflection");
