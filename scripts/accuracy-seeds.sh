@@ -7,6 +7,8 @@
 # ROBOCAL_REALISM=typical (or a realism JSON file) gives the true robots what a real arm carries
 # beside its geometry (robocal simulate --realism, docs/realism.md); the default is ideal.
 # ROBOCAL_CELL: another cell file (e.g. with motion.approach_deg set).
+# ROBOCAL_WHOLE_RANGE=N judges N joint vectors over the arm's whole range instead of the work
+# volume (robocal accuracy --whole-range).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${ROBOCAL_BUILD_DIR:-$root/build}
@@ -25,8 +27,10 @@ for seed in $(seq 1 "$seeds"); do
   # --allow-partial: a fit the verdict refuses is still measured here (its problems in fit.json).
   "$bin" solve --model "$model" "$work/s.csv" --out "$work/cal.json" --json --allow-partial \
     >"$work/fit.json" 2>/dev/null
+  where=()
+  [[ -n ${ROBOCAL_WHOLE_RANGE:-} ]] && where=(--whole-range "$ROBOCAL_WHOLE_RANGE")
   "$bin" accuracy --nominal "$model" --calibrated "$work/cal.json" --truth "$work/truth.json" \
-    --json >"$work/acc.json"
+    "${where[@]}" --json >"$work/acc.json"
   jq -r --argjson seed "$seed" --slurpfile fit "$work/fit.json" '
     def f(x): (x * 10000 | round) / 10000;
     "| \($seed) | \($fit[0].n) | \(f($fit[0].rms_mm)) | \(f(.nominal_commanded_position_error_mm.rms)) / \(f(.nominal_commanded_position_error_mm.p95)) | \(f(.compensated_commanded_position_error_mm.rms)) / \(f(.compensated_commanded_position_error_mm.p95)) / \(f(.compensated_commanded_position_error_mm.max)) | \((.nominal_commanded_position_error_mm.rms / .compensated_commanded_position_error_mm.rms * 10 | round) / 10) | \(f(.calibrated_model_position_error_mm.rms)) | \(f(.predicted_position_error_mm.rms)) | \(f(.nominal_commanded_orientation_error_deg.rms)) / \(f(.compensated_commanded_orientation_error_deg.rms)) |"' \

@@ -3,6 +3,11 @@
 # calibration the way a cell would run it: robocal-cellsim plays the robot and the ball-bar on
 # pseudo-terminals, robocald runs the two-set plan (nine shells, then nine with the 150 mm
 # extension), and a simulated operator answers the connection prompts. Output in out/.
+# The true robot is not its model: it carries a real arm's backlash, gravity compliance and
+# warm-up and the LVDT's errors (ROBOCAL_REALISM, default typical: docs/realism.md; ideal for a
+# robot that is exactly its model). Every point is approached from below in each joint
+# (motion.approach_deg ROBOCAL_APPROACH_DEG, default 0.02; 0 for none) so that backlash is
+# designed out (docs/accuracy.md).
 # ROBOCAL_PLAN_BUDGET_MIN=M runs an optimal plan of M minutes of cell time instead of the
 # cell's grid (docs/cell-time.md).
 set -euo pipefail
@@ -15,9 +20,11 @@ build=${ROBOCAL_BUILD_DIR:-$root/build}
 bin=$build/cli/robocal
 out=${ROBOCAL_OUT:-$root/out}
 model=$root/config/puma560.json
-cell=${ROBOCAL_CELL:-$root/config/cell.json}
+realism=${ROBOCAL_REALISM:-typical}
 rm -rf "$out"
 mkdir -p "$out"
+cell=$out/cell.json
+jq ".motion.approach_deg = ${ROBOCAL_APPROACH_DEG:-0.02}" "${ROBOCAL_CELL:-$root/config/cell.json}" >"$cell"
 pids=()
 cleanup() { for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done; }
 trap cleanup EXIT
@@ -25,9 +32,9 @@ trap cleanup EXIT
 echo "== identifiability of the nine connections (paper Table I)"
 "$bin" identify --model "$model" --connections all
 echo
-echo "== a perturbed true robot (the simulate defaults: balls 1-2 mm off the nominal)"
+echo "== a perturbed true robot (the simulate defaults: balls 1-2 mm off the nominal), realism $realism"
 "$bin" simulate --model "$model" --seed 7 --connections B1C1 --points-per-shell 1 \
-  --out "$out/unused.csv" --truth-out "$out/truth.json" | tail -2
+  --realism "$realism" --out "$out/unused.csv" --truth-out "$out/truth.json" | tail -3
 echo
 echo "== the off-line plan"
 budget=()
@@ -56,6 +63,7 @@ echo "re-centring moves: $(grep -c '"recentre"' "$run_dir/events.jsonl" || true)
 echo
 echo "== the calibrated model against the simulated truth (all samples of the run, refitted)"
 "$bin" solve --model "$model" "$run_dir/samples.csv" --truth "$out/truth.json" \
+  --approach-deg "$(jq .motion.approach_deg "$cell")" \
   --out "$out/calibrated.json" --report "$out/report"
 echo
 echo "== where the user works: the true robot commanded with nominal and with compensated joints"

@@ -50,6 +50,9 @@ std::string colour(double t) {
 struct Panel {
   std::string title;
   std::function<double(const PoseAccuracy&)> value;  // mm
+  // Panels of one group share their colour scale: the calibrated errors, predicted and true, are
+  // read against each other; the nominal's, 50-100x larger, has its own.
+  int scale_group = 0;
 };
 
 }  // namespace
@@ -144,7 +147,7 @@ std::string accuracySvg(const AccuracyReport& r) {
                       [](const PoseAccuracy& p) { return p.target.predicted_position_error_mm; }});
   if (r.has_truth) {
     panels.push_back({"true error, nominal joints",
-                      [](const PoseAccuracy& p) { return p.nominal_commanded.position_mm; }});
+                      [](const PoseAccuracy& p) { return p.nominal_commanded.position_mm; }, 1});
     panels.push_back({"true error, compensated joints",
                       [](const PoseAccuracy& p) { return p.compensated_commanded.position_mm; }});
   }
@@ -177,7 +180,9 @@ std::string accuracySvg(const AccuracyReport& r) {
   for (size_t k = 0; k < panels.size(); ++k) {
     const double ox = left + k * (plot + gap);
     double vmax = 0;
-    for (const PoseAccuracy* p : ok) vmax = std::max(vmax, panels[k].value(*p));
+    for (const Panel& panel : panels)
+      if (panel.scale_group == panels[k].scale_group)
+        for (const PoseAccuracy* p : ok) vmax = std::max(vmax, panel.value(*p));
     const AxisTicks colour_ticks = niceTicks(0, vmax > 0 ? vmax : 1e-3, 4);
     const double cmax = colour_ticks.last();
     svg += fmt("<text x=\"%.0f\" y=\"%.0f\" font-size=\"13\">", ox, top - 10) + panels[k].title +

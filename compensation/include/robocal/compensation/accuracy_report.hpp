@@ -23,7 +23,8 @@ std::string accuracyText(const AccuracyReport& report);
 
 // The targets seen from above (x, y in the world frame), each a dot coloured by its error: the
 // predicted error, and with a truth the true error commanded with the nominal and with the
-// compensated readings, one panel each, each with its own colour scale.
+// compensated readings, one panel each; the predicted and the compensated share a colour scale,
+// the nominal (far larger) has its own.
 std::string accuracySvg(const AccuracyReport& report);
 
 // The predicted error over the work volume of a fit (no truth), as `robocal solve` and robocald
