@@ -7,7 +7,8 @@
 # warm-up and the LVDT's errors (ROBOCAL_REALISM, default typical: docs/realism.md; ideal for a
 # robot that is exactly its model). Every point is approached from below in each joint
 # (motion.approach_deg ROBOCAL_APPROACH_DEG, default 0.02; 0 for none) so that backlash is
-# designed out (docs/accuracy.md).
+# designed out (docs/accuracy.md), and every 20th point is measured again (motion.revisit_every
+# ROBOCAL_REVISIT_EVERY; 0 for none) so that the fit measures the bar's noise.
 # ROBOCAL_PLAN_BUDGET_MIN=M runs an optimal plan of M minutes of cell time instead of the
 # cell's grid (docs/cell-time.md).
 set -euo pipefail
@@ -24,7 +25,8 @@ realism=${ROBOCAL_REALISM:-typical}
 rm -rf "$out"
 mkdir -p "$out"
 cell=$out/cell.json
-jq ".motion.approach_deg = ${ROBOCAL_APPROACH_DEG:-0.02}" "${ROBOCAL_CELL:-$root/config/cell.json}" >"$cell"
+jq ".motion.approach_deg = ${ROBOCAL_APPROACH_DEG:-0.02} | .motion.revisit_every = ${ROBOCAL_REVISIT_EVERY:-20}" \
+  "${ROBOCAL_CELL:-$root/config/cell.json}" >"$cell"
 pids=()
 cleanup() { for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done; }
 trap cleanup EXIT

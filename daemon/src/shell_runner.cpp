@@ -90,7 +90,8 @@ ShellRunner::ShellRunner(RunContext& ctx, FitJob& fits, RunDir& dir, const Plan&
 // ------------------------------------------------------------------------ book-keeping
 
 bool ShellRunner::isDone(int shell, const PlanStep& step) const {
-  return done_.count(pointKey(shell, step.lat_deg, step.lon_deg)) > 0;
+  return done_.count(pointKey(shell, step.lat_deg, step.lon_deg)) >
+         static_cast<std::size_t>(step.visit);
 }
 
 int ShellRunner::pointsLeft(const ShellPlan& shell) const {

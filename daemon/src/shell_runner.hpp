@@ -68,8 +68,10 @@ class ShellRunner {
   RunDir& dir_;
   const Plan& plan_;
   const CellConfig& cell_;
-  std::vector<Sample> samples_;                     // every data point of the run
-  std::set<std::tuple<int, double, double>> done_;  // (shell, lat, lon) measured
+  std::vector<Sample> samples_;  // every data point of the run
+  // (shell, lat, lon) of every sample: a point's revisit (PlanStep::visit 1) is done when its
+  // place was measured twice.
+  std::multiset<std::tuple<int, double, double>> done_;
   int total_points_ = 0;
   TimeLeft time_left_;
   ShellWatch shell_watch_;                           // a connection going bad mid-shell

@@ -337,13 +337,21 @@ nlohmann::ordered_json fitSummaryJson(const FitAssessment& a) {
                         {"chi2", p.chi2},
                         {"threshold", p.threshold},
                         {"rms_mm", p.rms_mm}});
-  // noise_mm: the bar's noise measured by revisits of points (none yet: null).
-  out["adequacy"] = {{"ok", a.adequacy.ok},
-                     {"noise_mm", nullptr},
-                     {"sigma_mm", a.adequacy.sigma_mm},
-                     {"lack_of_fit_mm", a.adequacy.unmodelled_mm},
-                     {"summary", a.adequacy.summary()},
-                     {"patterns", patterns}};
+  // noise_mm: the bar's noise measured by revisits of points (null without revisits).
+  const Adequacy& ad = a.adequacy;
+  out["adequacy"] = {
+      {"ok", ad.ok},
+      {"noise_mm", ad.noise_mm ? ojson(*ad.noise_mm) : ojson(nullptr)},
+      {"revisited_places", ad.revisited_places},
+      {"noise_dof", ad.noise_dof},
+      {"fit_over_noise", ad.noise_mm ? ojson(ad.fit_over_noise) : ojson(nullptr)},
+      {"fit_over_noise_limit",
+       ad.fit_over_noise_limit > 0 ? ojson(ad.fit_over_noise_limit) : ojson(nullptr)},
+      {"lack_of_fit", ad.lack_of_fit},
+      {"sigma_mm", a.adequacy.sigma_mm},
+      {"lack_of_fit_mm", a.adequacy.unmodelled_mm},
+      {"summary", a.adequacy.summary()},
+      {"patterns", patterns}};
   ojson outliers = ojson::array();
   for (const FlaggedOutlier& o : a.outliers) {
     ojson j = sampleRef(o.sample);

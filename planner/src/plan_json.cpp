@@ -27,6 +27,7 @@ ordered_json stepToJson(const PlanStep& s) {
   j["joints_deg"] = q;
   j["lat_deg"] = tidy(s.lat_deg);
   j["lon_deg"] = tidy(s.lon_deg);
+  if (s.visit > 0) j["visit"] = s.visit;
   return j;
 }
 
@@ -67,6 +68,8 @@ class Reader {
       s.joints_deg[k] = r_.number(q[k], jsonread::indexPath(where + ".joints_deg", k));
     s.lat_deg = number(j, where, "lat_deg");
     s.lon_deg = number(j, where, "lon_deg");
+    s.visit = count(j, where, "visit", 0);
+    if (s.visit > 1) fail(where + ".visit", "expected 0 (first) or 1 (revisit)");
     return s;
   }
   // An optional count of a summary (points, rank): a whole number from 0 to 1e9, else fallback

@@ -695,9 +695,32 @@ ShellPlan ShellPlanner::joinPoints(const Connection& c, double extension_mm, int
     return policyPose(c, radius, ch.lat_deg, ch.lon_deg, ch.offset.yaw_deg, ch.offset.pitch_deg,
                       ch.offset.roll_deg);
   };
-  Node prev;
+  // The order of the measurements: every point once, and with motion.revisit_every, after every
+  // that many points the one before the last again (the arm has moved on and comes back).
+  std::vector<std::pair<size_t, int>> visits;  // (index in chosen, visit)
+  const int every = cell_.motion.revisit_every;
   for (size_t n = 0; n < chosen.size(); ++n) {
+    visits.push_back({n, 0});
+    if (every > 0 && n >= 2 && n % static_cast<size_t>(every) == 0) visits.push_back({n - 1, 1});
+  }
+  std::vector<std::optional<Node>> placed(chosen.size());  // each point's first visit
+  Node prev;
+  for (const auto& [n, visit] : visits) {
     const ShellPoint& ch = chosen[n];
+    if (visit > 0) {
+      // The same joints, reached the same way; a revisit that cannot be joined is left out (it
+      // measures the noise, not the robot: nothing of the grid is lost).
+      if (!placed[n]) continue;
+      std::vector<PlanStep> vias;
+      std::string ignored;
+      if (!planApproach(c, radius, shell.config, prev, *placed[n], vias,
+                        shell.summary.max_deviation_mm, ignored))
+        continue;
+      shell.steps.insert(shell.steps.end(), vias.begin(), vias.end());
+      shell.steps.push_back({StepKind::kPoint, placed[n]->q, ch.lat_deg, ch.lon_deg, 1});
+      prev = *placed[n];
+      continue;
+    }
     const Eigen::Isometry3d pose = poseOf(ch);
     const IkSolution s = ik_.solve(pose, shell.config, &ch.joints_deg);
     const std::string problem = s.ok() ? poseProblem(c, radius, s.joints_deg, tol)
@@ -749,6 +772,7 @@ ShellPlan ShellPlanner::joinPoints(const Connection& c, double extension_mm, int
     shell.steps.insert(shell.steps.end(), vias.begin(), vias.end());
     shell.steps.push_back({StepKind::kPoint, node.q, ch.lat_deg, ch.lon_deg});
     prev = node;
+    placed[n] = node;
   }
   finishShell(shell);
   return shell;
@@ -828,7 +852,7 @@ ShellPlan ShellPlanner::replanRemaining(const ShellPlan& old, std::size_t next_s
       continue;
     }
     shell.steps.insert(shell.steps.end(), vias.begin(), vias.end());
-    shell.steps.push_back({StepKind::kPoint, s.joints_deg, step.lat_deg, step.lon_deg});
+    shell.steps.push_back({StepKind::kPoint, s.joints_deg, step.lat_deg, step.lon_deg, step.visit});
     prev = node;
   }
   finishShell(shell);

@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
+#include <tuple>
 
 namespace robocal {
 namespace {
@@ -63,20 +65,75 @@ Regression regress(const Eigen::MatrixXd& g, const Eigen::VectorXd& r, double si
 
 }  // namespace
 
-std::string Adequacy::summary() const {
-  char buf[96];
-  if (ok) {
-    std::snprintf(buf, sizeof buf, "no pattern in the residual (sigma %.3f mm)", sigma_mm);
-    return buf;
+namespace {
+
+// The residuals of each place measured more than once (same shell, same lat/lon), about their
+// mean: the bar's noise, whatever the model.
+void measureNoise(const std::vector<Sample>& samples, const Eigen::VectorXd& residuals,
+                  Adequacy& a) {
+  std::map<std::tuple<int, int, int, double, double, double>, std::vector<double>> places;
+  for (size_t i = 0; i < samples.size(); ++i) {
+    const Sample& s = samples[i];
+    places[{s.shell, s.ball_index, s.chuck_index, s.extension_mm, s.lat_deg, s.lon_deg}].push_back(
+        residuals[static_cast<Eigen::Index>(i)]);
   }
-  std::snprintf(buf, sizeof buf, "%.3f mm of error the model does not contain; it follows ",
-                unmodelled_mm);
-  std::string out = buf;
-  bool first = true;
-  for (const AdequacyPattern& p : patterns) {
-    if (!p.found) continue;
-    out += (first ? "the " : " and the ") + p.pattern + (p.detail.empty() ? "" : " of " + p.detail);
-    first = false;
+  double squares = 0;
+  for (const auto& [place, r] : places) {
+    if (r.size() < 2) continue;
+    double mean = 0;
+    for (double v : r) mean += v;
+    mean /= static_cast<double>(r.size());
+    for (double v : r) squares += (v - mean) * (v - mean);
+    ++a.revisited_places;
+    a.noise_dof += static_cast<int>(r.size()) - 1;
+  }
+  if (a.noise_dof > 0) a.noise_mm = std::sqrt(squares / a.noise_dof);
+}
+
+// The lower quantile of chi-square with `dof` degrees of freedom at 1e-3 or 1e-2
+// (Wilson-Hilferty: within a few per cent from 10 degrees of freedom).
+double chi2LowerQuantile(int dof, double false_alarm) {
+  const double z = false_alarm <= 1e-3 ? -3.0902 : -2.3263;
+  const double k = 2.0 / (9.0 * dof);
+  return dof * std::pow(std::max(0.0, 1 - k + z * std::sqrt(k)), 3);
+}
+
+}  // namespace
+
+std::string Adequacy::summary() const {
+  char buf[200];
+  std::string out;
+  bool patterns_found = false;
+  for (const AdequacyPattern& p : patterns) patterns_found = patterns_found || p.found;
+  if (!patterns_found && !lack_of_fit) {
+    std::snprintf(buf, sizeof buf, "no pattern in the residual (sigma %.3f mm)", sigma_mm);
+    out = buf;
+    if (noise_mm) {
+      std::snprintf(buf, sizeof buf, "; the bar's noise measured by %d revisits: %.3f mm",
+                    revisited_places, *noise_mm);
+      out += buf;
+    }
+    return out;
+  }
+  if (patterns_found) {
+    std::snprintf(buf, sizeof buf, "%.3f mm of error the model does not contain; it follows ",
+                  unmodelled_mm);
+    out = buf;
+    bool first = true;
+    for (const AdequacyPattern& p : patterns) {
+      if (!p.found) continue;
+      out +=
+          (first ? "the " : " and the ") + p.pattern + (p.detail.empty() ? "" : " of " + p.detail);
+      first = false;
+    }
+  }
+  if (lack_of_fit) {
+    std::snprintf(buf, sizeof buf,
+                  "%sthe fit's residual, %.3f mm, is %.2fx the bar's noise measured by %d "
+                  "revisits (%.3f mm)%s",
+                  out.empty() ? "" : "; ", sigma_mm, fit_over_noise, revisited_places,
+                  noise_mm.value_or(0), patterns_found ? "" : ": error the model does not contain");
+    out += buf;
   }
   return out;
 }
@@ -156,6 +213,16 @@ Adequacy testAdequacy(const Model& calibrated, const std::vector<Sample>& sample
   }
   a.ok = found_features.cols() == 0;
   if (!a.ok) a.unmodelled_mm = regress(found_features, residuals, sigma_mm).rms_mm;
+
+  measureNoise(samples, residuals, a);
+  if (a.noise_mm && *a.noise_mm > 0 && a.noise_dof >= 10) {
+    // sigma^2 / noise^2 is about 1 when the model is right; the noise's own estimate may be low
+    // by chance, by chi2(dof)/dof at its lower quantile.
+    a.fit_over_noise = sigma_mm / *a.noise_mm;
+    a.fit_over_noise_limit = std::sqrt(a.noise_dof / chi2LowerQuantile(a.noise_dof, false_alarm));
+    a.lack_of_fit = a.fit_over_noise > a.fit_over_noise_limit;
+    if (a.lack_of_fit) a.ok = false;
+  }
   return a;
 }
 

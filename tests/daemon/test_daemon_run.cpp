@@ -18,8 +18,10 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <random>
 #include <set>
+#include <thread>
 
 using namespace robocal;
 using namespace robocal::test;
@@ -418,4 +420,54 @@ TEST_CASE("a kill while a set is fitted: resume fits it again and the run ends w
   // And a second resume after it has nothing to do: the run is done.
   CHECK(c->request({{"cmd", "resume"}, {"token", cell.daemon->token()}}, 10, "ERROR")["class"] ==
         "ERROR");
+}
+
+TEST_CASE("revisits are measured through robocald, each once, across a kill and a resume",
+          "[e2e]") {
+  Cell cell({"B1C1", "B2C2"}, 14);
+  json cell_file = json::parse(readTextFile(cell.dir / "cell.json"));
+  cell_file["motion"]["revisit_every"] = 3;
+  std::ofstream(cell.dir / "cell.json") << cell_file.dump(1);
+  cell.daemon->stop();
+  cell.daemon->start();
+  auto c = cell.daemon->client();
+  c->send({{"cmd", "watch"}, {"enable", true}});
+  REQUIRE(c->request({{"cmd", "start"}, {"token", cell.daemon->token()}}, 30, "ACK")["class"] ==
+          "ACK");
+  REQUIRE(cell.operate(*c, {"done", "paused", "error"}, 4).empty());
+  cell.daemon->kill9();
+  cell.daemon->start();
+  c = cell.daemon->client();
+  c->send({{"cmd", "watch"}, {"enable", true}});
+  const std::string run_id = c->request({{"cmd", "status"}}, 10, "STATUS")["run"];
+  std::string state;
+  for (int resumes = 0; resumes < 3 && state != "done"; ++resumes) {
+    // A kill between seating and confirming pauses the first move after it (the bar believed
+    // off): the operator resumes, as in the kill -9 test above.
+    REQUIRE(c->request({{"cmd", "resume"}, {"token", cell.daemon->token()}}, 30, "ACK")["class"] ==
+            "ACK");
+    state = cell.operate(*c, {"done", "paused", "error"}, 240);
+  }
+  REQUIRE(state == "done");
+  // Every place as many times as the plan measures it (a point and its revisit: twice).
+  std::map<std::tuple<int, long, long>, int> planned, measured;
+  for (const auto& sh : loadPlanFile(cell.runDir(run_id) + "/plan.json").shells)
+    for (const auto& st : sh.steps)
+      if (st.kind == StepKind::kPoint)
+        ++planned[{sh.shell, std::lround(st.lat_deg * 1000), std::lround(st.lon_deg * 1000)}];
+  for (const Sample& s : loadSamplesFile(cell.runDir(run_id) + "/samples.csv"))
+    ++measured[{s.shell, std::lround(s.lat_deg * 1000), std::lround(s.lon_deg * 1000)}];
+  int twice = 0;
+  for (const auto& [place, n] : planned) twice += n == 2;
+  CHECK(twice >= 4);
+  CHECK(measured == planned);
+  // The fit measured the bar's noise from them.
+  json result = c->request({{"cmd", "result"}}, 10, "RESULT");
+  for (int i = 0; i < 50 && result.value("available", true) == false; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    result = c->request({{"cmd", "result"}}, 10, "RESULT");
+  }
+  INFO(result.dump().substr(0, 2000));
+  CHECK(result["adequacy"]["revisited_places"] == twice);
+  CHECK(result["adequacy"]["noise_mm"].get<double>() > 0);
 }

@@ -12,6 +12,7 @@
 #include <robocal/sim/measurements.hpp>
 
 #include <unistd.h>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -413,6 +414,51 @@ TEST_CASE("with approach_deg every point is approached from below in every joint
   // Without it (the default), many points are reached from above in some joint.
   const ShellPlan& plain = defaultPlan().shells[2];
   CHECK(pointsNotApproachedFromBelow(plain) > plain.summary.points / 4);
+}
+
+TEST_CASE("with revisit_every a few points are measured again, reached the same way, and kept") {
+  CellConfig cell = defaultCell();
+  cell.motion.approach_deg = 0.02;
+  cell.motion.revisit_every = 20;
+  const ShellPlan shell = ShellPlanner(nominal(), cell).planShell({0, 0}, 0, 1);
+  int firsts = 0, revisits = 0;
+  for (size_t i = 0; i < shell.steps.size(); ++i) {
+    const PlanStep& step = shell.steps[i];
+    if (step.kind != StepKind::kPoint) continue;
+    if (step.visit == 0) {
+      ++firsts;
+      continue;
+    }
+    ++revisits;
+    // The same place and joints as an earlier first visit, measured after another point.
+    const auto first = std::find_if(shell.steps.begin(), shell.steps.begin() + i, [&](auto& s) {
+      return s.kind == StepKind::kPoint && s.visit == 0 && s.lat_deg == step.lat_deg &&
+             s.lon_deg == step.lon_deg;
+    });
+    REQUIRE(first != shell.steps.begin() + i);
+    CHECK((first->joints_deg - step.joints_deg).cwiseAbs().maxCoeff() < 1e-9);
+    CHECK(first + 1 < shell.steps.begin() + i);
+  }
+  CHECK(revisits == firsts / 20);
+  CHECK(pointsNotApproachedFromBelow(shell) == 0);  // the revisits too
+  Plan plan;
+  plan.cell = cell;
+  plan.shells = {shell};
+  CHECK(checkPlan(nominal(), cell, plan).empty());
+  // The visit survives the file and a re-plan of the rest; a plan file's bad visit is refused.
+  const Plan back = parsePlan(formatPlan(plan), "p.json");
+  REQUIRE(back.shells[0].steps.size() == shell.steps.size());
+  for (size_t i = 0; i < shell.steps.size(); ++i)
+    CHECK(back.shells[0].steps[i].visit == shell.steps[i].visit);
+  const ShellPlan rest =
+      ShellPlanner(nominal(), cell).replanRemaining(shell, 1, shell.connect.joints_deg);
+  int replanned_revisits = 0;
+  for (const PlanStep& step : rest.steps) replanned_revisits += step.visit;
+  CHECK(replanned_revisits == revisits);
+  std::string text = formatPlan(plan);
+  const auto at = text.find("\"lat_deg\"", text.find("\"steps\""));
+  text.insert(at, "\"visit\": 2, ");
+  CHECK_THROWS_WITH(parsePlan(text, "p.json"), Catch::Contains("visit"));
 }
 
 TEST_CASE("the deflection forecast grows with the model uncertainty") {

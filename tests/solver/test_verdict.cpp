@@ -10,6 +10,9 @@
 #include "fit_fixtures.hpp"
 
 #include <algorithm>
+#include <map>
+#include <random>
+#include <tuple>
 
 using namespace robocal;
 using namespace robocal::test;
@@ -121,4 +124,45 @@ TEST_CASE("adequacy: backlash shows as a pattern of the approach, an ideal robot
   }
   CHECK(fired_backlash == seeds);
   CHECK(fired_ideal <= 1);
+}
+
+TEST_CASE(
+    "adequacy: revisits measure the bar's noise; a residual the noise cannot explain is found") {
+  const Model nominal = puma560NominalModel();
+  const Model truth = perturbed(1.0, 95);
+  Shells shells = planShells(nominal, "all", 0, 40, 105);
+  // Every fourth point measured again at the end of its shell: 10 revisits a shell.
+  for (auto& poses : shells.poses) {
+    const std::size_t n = poses.size();
+    for (std::size_t i = 0; i < n; i += 4) poses.push_back(poses[i]);
+  }
+  const double noise_mm = 0.05;
+  std::vector<Sample> samples = measure(truth, shells, noise_mm, 106);
+  const FitAssessment plain = assessFit(nominal, samples);
+  INFO(plain.adequacy.summary());
+  REQUIRE(plain.adequacy.noise_mm);
+  CHECK(plain.adequacy.revisited_places == 90);
+  CHECK(plain.adequacy.noise_dof == 90);
+  CHECK(*plain.adequacy.noise_mm == Approx(noise_mm).epsilon(0.3));
+  CHECK_FALSE(plain.adequacy.lack_of_fit);
+  CHECK(plain.adequacy.ok);
+  CHECK_THAT(plain.adequacy.summary(), Catch::Contains("the bar's noise measured by 90 revisits"));
+
+  // An error of each place that no pattern follows and no parameter absorbs (0.08 mm, the same
+  // at a revisit): the residual outgrows the noise.
+  std::mt19937_64 rng(107);
+  std::normal_distribution<double> place_error(0.0, 0.08);
+  std::map<std::tuple<int, double, double>, double> error_of;
+  for (Sample& s : samples) {
+    const auto key = std::make_tuple(s.shell, s.lat_deg, s.lon_deg);
+    if (!error_of.count(key)) error_of[key] = place_error(rng);
+    s.length_mm += error_of[key];
+  }
+  const FitAssessment worse = assessFit(nominal, samples);
+  INFO(worse.adequacy.summary());
+  CHECK(worse.adequacy.noise_mm.value_or(0) == Approx(noise_mm).epsilon(0.3));
+  CHECK(worse.adequacy.lack_of_fit);
+  CHECK_FALSE(worse.adequacy.ok);
+  CHECK(worse.adequacy.fit_over_noise > worse.adequacy.fit_over_noise_limit);
+  CHECK_THAT(worse.adequacy.summary(), Catch::Contains("x the bar's noise measured by 90"));
 }

@@ -60,6 +60,10 @@ struct MotionSettings {
   // 0.02 halved the realistic truth's extra error (docs/accuracy.md). Off (0) by default until the
   // optimal and check plans are tuned with it (they lose points and minutes to it).
   double approach_deg = 0;
+  // When positive, after every this many points of a shell the point before the last is measured
+  // again (its revisit, reached the same way): the revisits measure the bar's own noise, so a fit
+  // judges its residual against it (solver/adequacy.hpp) instead of assuming it. 0: none.
+  int revisit_every = 0;
 };
 
 // Model error assumed by the plan's forecast of the bar's deflection: Gaussian perturbations of

@@ -28,6 +28,8 @@ struct PlanStep {
   StepKind kind = StepKind::kPoint;
   JointsDeg joints_deg = JointsDeg::Zero();
   double lat_deg = 0, lon_deg = 0;  // where the ball is on the shell (vias too)
+  // A point's measurement of the same place: 0 the first, 1 its revisit (motion.revisit_every).
+  int visit = 0;
 };
 
 struct DroppedPoint {

@@ -11,13 +11,19 @@
 //     t the sample's place in the run, 0 to 1.
 // A pattern is found when the residual's reduction by it, over sigma^2, exceeds the chi-square
 // quantile of its features at `false_alarm` (1e-3): on an ideal robot it fires about once in a
-// thousand fits. Its size is the RMS of the fitted pattern. No I/O.
+// thousand fits. Its size is the RMS of the fitted pattern.
+// With revisits (samples of the same shell at the same place: the plan's motion.revisit_every),
+// the bar's noise is measured, not assumed: the spread of the residuals of each place about their
+// mean (pure error). The fit's residual standard error is then tested against it (lack of fit):
+// a residual too large for the noise, at the same false-alarm rate, is error the model does not
+// contain even when it follows none of the patterns. No I/O.
 #pragma once
 
 #include <robocal/kinematics/model.hpp>
 #include <robocal/kinematics/sample.hpp>
 
 #include <Eigen/Core>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -39,6 +45,15 @@ struct Adequacy {
   // RMS of the residual the found patterns explain together: error the model does not contain.
   double unmodelled_mm = 0;
   std::vector<AdequacyPattern> patterns;  // every pattern tested, found or not
+  // From the revisits: how many places were measured more than once, the degrees of freedom of
+  // their pure error, and the noise it measures (absent without revisits).
+  int revisited_places = 0;
+  int noise_dof = 0;
+  std::optional<double> noise_mm;
+  // sigma_mm over the measured noise, the largest ratio the noise explains at the false-alarm
+  // rate (judged from 10 degrees of freedom), and whether the fit exceeds it.
+  double fit_over_noise = 0, fit_over_noise_limit = 0;
+  bool lack_of_fit = false;
   // One sentence for people: "0.042 mm of error the model does not contain; it follows the
   // approach direction of joints 2, 3", or "no pattern in the residual ...".
   std::string summary() const;
