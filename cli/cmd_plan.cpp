@@ -202,7 +202,7 @@ int run(const std::vector<std::string>& argv) {
         "mm, %zu poses); cell time %.1f min: robot %.1f min, %d bar swaps %.1f min\n",
         predicted_mm, design.noise_sigma_mm, work_joints.size(), sum.cell_time_s / 60.0,
         sum.duration_s / 60.0, sum.shells, sum.swap_time_s / 60.0);
-  if (!check)
+  if (!check && std::isfinite(whole_mm) && std::isfinite(predicted_mm) && predicted_mm > 0)
     std::printf(
         "whole range: predicted RMS tool position error %.4f mm after the fit over %zu joint "
         "vectors within the arm's limits (%.1fx the work volume's: what this plan does not "

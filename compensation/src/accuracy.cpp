@@ -53,7 +53,8 @@ std::vector<JointsDeg> wholeRangeJoints(const Model& model, std::size_t count, s
   std::mt19937_64 rng(seed);
   std::vector<JointsDeg> out;
   out.reserve(count);
-  while (out.size() < count) {
+  // A model whose joint 5 lives within the margin of its singularity gets no vectors, not a hang.
+  for (std::size_t draw = 0; out.size() < count && draw < 100 * count; ++draw) {
     JointsDeg q;
     for (int j = 0; j < kJointCount; ++j)
       q[j] = std::uniform_real_distribution<double>(model.joints[j].min_deg,

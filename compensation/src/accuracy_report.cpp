@@ -128,14 +128,15 @@ std::string accuracyText(const AccuracyReport& r) {
                      "deg", 5);
     out += statsLine(
         "commanded with compensated joints, orientation:", r.compensated_orientation_deg, "deg", 5);
-    const double gain = r.nominal_position_mm.rms / r.compensated_position_mm.rms;
-    if (r.compensated_position_mm.rms > 0 && gain >= 1)
-      out += fmt("  compensation makes the RMS position error %.1fx smaller\n", gain);
-    else if (r.compensated_position_mm.rms > 0)
+    const double nominal = r.nominal_position_mm.rms, compensated = r.compensated_position_mm.rms;
+    if (nominal > 0 && compensated > 0 && nominal >= compensated)
+      out +=
+          fmt("  compensation makes the RMS position error %.1fx smaller\n", nominal / compensated);
+    else if (nominal > 0 && compensated > 0)
       out +=
           fmt("  compensation makes the RMS position error %.1fx LARGER here: the calibration does "
               "not cover these poses\n",
-              1 / gain);
+              compensated / nominal);
   }
   return out;
 }
@@ -256,14 +257,14 @@ PredictedAccuracy predictedAccuracy(const Model& nominal, const Model& calibrate
       out.text = accuracyText(volume);
       out.work_volume_rms_mm = volume.predicted_position_mm.rms;
       if (!report_dir.empty()) writeWorkVolumeReport(report_dir, volume);
-    } catch (const std::invalid_argument& e) {  // the volume is out of reach
+    } catch (const std::exception& e) {  // the volume is out of reach, the report unwritable
       out.work_volume = {{"error", e.what()}};
       out.text = std::string("work-volume accuracy: ") + e.what() + "\n";
     }
     const AccuracyReport whole = predictedWholeRangeAccuracy(compensator);
     out.whole_range = accuracyJson(whole);
     out.text += accuracyText(whole);
-  } catch (const std::invalid_argument& e) {  // a model compensation cannot use
+  } catch (const std::exception& e) {  // a model compensation cannot use
     out.work_volume = out.whole_range = {{"error", e.what()}};
     out.text = std::string("accuracy: ") + e.what() + "\n";
   }

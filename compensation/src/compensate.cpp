@@ -227,6 +227,7 @@ void Compensator::addApproach(CompensatedTarget& t) const {
         << " deg, below its limit " << joint.min_deg << " deg";
     t.status = CompensationStatus::kOutsideLimits;
     t.reason = why.str();
+    t.approach.fill(0);  // no readings are given: nothing to approach
     return;
   }
 }

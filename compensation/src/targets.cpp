@@ -150,7 +150,8 @@ std::string formatCompensated(const TargetFile& file, const std::vector<Compensa
     if (approach_deg > 0)
       out += "; each target follows its approach pre-point, " + fixed(approach_deg, 4) +
              " deg below it in every joint: reach the target from there, as the calibration "
-             "reached its points\n";
+             "reached its points" +
+             (format == OutputFormat::kVal2Moves ? "" : " (the pre-points are comments)") + "\n";
   }
   for (size_t i = 0; i < results.size(); ++i) {
     const CompensatedTarget& r = results[i];
@@ -179,7 +180,9 @@ std::string formatCompensated(const TargetFile& file, const std::vector<Compensa
       for (int j = 0; j < kJointCount; ++j) text += (j ? ", " : "") + fixed(q[j], 4);
       return text + ")\n";
     };
-    if (r.hasApproach()) out += point(r.pre_point_deg);
+    // A points list stays one line a target (programs index it): its pre-point is a comment.
+    if (r.hasApproach())
+      out += (format == OutputFormat::kVal2Moves ? "" : "; pre-point ") + point(r.pre_point_deg);
     out += point(r.joints_deg);
   }
   return out;

@@ -23,6 +23,8 @@ constexpr double kConnectSlackMm = 0.1;
 // The connection check's smallest approach step (deg): a real arm's backlash is 0.005-0.02 deg
 // (docs/realism.md).
 constexpr double kCheckApproachDeg = 0.02;
+// The most a check's pre-point may change the bar, by the model (mm): a tenth of a soft limit.
+constexpr double kCheckPrePointMm = 0.1;
 
 // A data point of a shell, as the samples file identifies it.
 std::tuple<int, double, double> pointKey(int shell, double lat_deg, double lon_deg) {
@@ -302,17 +304,29 @@ void ShellRunner::verifyConnection(const ShellPlan& shell, JointsDeg& q) {
     return ctx_.measureHere(std::max(config.bar_window_s, 0.5));
   };
   const JointsDeg start = q;
-  // Every pose the check reads is reached up in every joint from a pre-point (the plan's approach,
-  // at least kCheckApproachDeg), so that each joint's backlash sits on the same side at every
-  // reading: a real arm's 0.01 deg of it, taken from both sides, changed a correct bar's reading
-  // by 0.07 mm across the bar and failed the check.
-  const double approach_deg = std::max(plan_.cell.motion.approach_deg, kCheckApproachDeg);
+  // Every pose the check reads is reached up in every joint from a pre-point (kCheckApproachDeg),
+  // so that each joint's backlash sits on the same side at every reading: a real arm's 0.01 deg
+  // of it, taken from both sides, changed a correct bar's reading by 0.07 mm across the bar and
+  // failed the check. The bar is on: a pre-point is taken only inside the joint limits and where
+  // the model predicts the bar changes by at most kCheckPrePointMm (else the check reads that
+  // pose as it comes, and says so in the log).
+  bool logged_skip = false;
   const auto moveUpTo = [&](const JointsDeg& target) {
-    const JointsDeg pre = target.array() - approach_deg;
+    const JointsDeg pre = target.array() - kCheckApproachDeg;
     bool inside = true;
     for (int j = 0; j < kJointCount; ++j)
       inside = inside && pre[j] >= centring_.model().joints[j].min_deg;
-    if (inside) ctx_.move(pre, true);
+    const double change_mm = barLengthMm(centring_.model(), shell.connection, pre) -
+                             barLengthMm(centring_.model(), shell.connection, target);
+    if (inside && std::abs(change_mm) <= kCheckPrePointMm) {
+      ctx_.move(pre, true);
+    } else if (!logged_skip) {
+      logged_skip = true;
+      ctx_.event(dir_, {{"event", "check_pre_point_skipped"},
+                        {"shell", shell.shell},
+                        {"predicted_change_mm", change_mm},
+                        {"inside_limits", inside}});
+    }
     return ctx_.move(target, true);
   };
   // Every step goes from a commanded pose to a commanded pose, and the model predicts the change
@@ -390,7 +404,8 @@ void ShellRunner::replanFrom(ShellPlan& shell, std::size_t from, const JointsDeg
     steps.push_back({{"kind", s.kind == StepKind::kPoint ? "point" : "via"},
                      {"joints", std::vector<double>(s.joints_deg.data(), s.joints_deg.data() + 6)},
                      {"lat_deg", s.lat_deg},
-                     {"lon_deg", s.lon_deg}});
+                     {"lon_deg", s.lon_deg},
+                     {"visit", s.visit}});
   }
   const std::string file = "replans/" + std::to_string(replans_) + ".json";
   std::filesystem::create_directories(dir_.file("replans"));
@@ -521,7 +536,10 @@ void ShellRunner::completeSet(std::size_t shell_index, bool only_unfitted) {
   if (check)
     fits_.launchCheck(dir_, samples_);  // a verdict on the active model, not a new fit
   else
-    fits_.launch(dir_, samples_, extension_mm, set_index, plan_.cell.motion.approach_deg);
+    // The plan's approach, unless the cell the re-plans use has another: then the points were
+    // reached both ways and the model records the smaller (0: none assumed).
+    fits_.launch(dir_, samples_, extension_mm, set_index,
+                 std::min(plan_.cell.motion.approach_deg, cell_.motion.approach_deg));
 }
 
 }  // namespace robocal::daemon

@@ -344,7 +344,7 @@ nlohmann::ordered_json fitSummaryJson(const FitAssessment& a) {
       {"noise_mm", ad.noise_mm ? ojson(*ad.noise_mm) : ojson(nullptr)},
       {"revisited_places", ad.revisited_places},
       {"noise_dof", ad.noise_dof},
-      {"fit_over_noise", ad.noise_mm ? ojson(ad.fit_over_noise) : ojson(nullptr)},
+      {"fit_over_noise", ad.fit_over_noise_limit > 0 ? ojson(ad.fit_over_noise) : ojson(nullptr)},
       {"fit_over_noise_limit",
        ad.fit_over_noise_limit > 0 ? ojson(ad.fit_over_noise_limit) : ojson(nullptr)},
       {"lack_of_fit", ad.lack_of_fit},

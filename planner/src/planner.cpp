@@ -710,7 +710,10 @@ ShellPlan ShellPlanner::joinPoints(const Connection& c, double extension_mm, int
     if (visit > 0) {
       // The same joints, reached the same way; a revisit that cannot be joined is left out (it
       // measures the noise, not the robot: nothing of the grid is lost).
-      if (!placed[n]) continue;
+      // Not straight after its first visit (the next point was dropped): the arm must have moved.
+      const bool just_measured = !shell.steps.empty() && shell.steps.back().lat_deg == ch.lat_deg &&
+                                 shell.steps.back().lon_deg == ch.lon_deg;
+      if (!placed[n] || just_measured) continue;
       std::vector<PlanStep> vias;
       std::string ignored;
       if (!planApproach(c, radius, shell.config, prev, *placed[n], vias,

@@ -330,6 +330,14 @@ TEST_CASE("targets are reached as the calibration reached its points: up from a 
   std::snprintf(pre, sizeof pre, "#PPOINT(%.4f,", with[0].pre_point_deg[0]);
   CHECK(moves.find(pre) == first + 8);
 
+  // A points list keeps one point a target: its pre-point is a comment.
+  const std::string points =
+      formatCompensated(file, with, OutputFormat::kVal2Points, comp.approachDeg());
+  CHECK_THAT(points, Contains("\n; pre-point #PPOINT("));
+  // Two header lines, the pre-point comment, the target, the unreachable one's comment.
+  CHECK(std::count(points.begin(), points.end(), '\n') == 5);
+  CHECK(points.find("\n#PPOINT(") != std::string::npos);
+
   // An explicit 0 turns it off; a pre-point below a joint's limit is refused, not commanded.
   CompensationOptions off;
   off.approach_deg = 0;
