@@ -173,8 +173,12 @@ std::string formatCompensated(const TargetFile& file, const std::vector<Compensa
       out += "; " + label + ": " + compensationStatusName(r.status) + ": " + r.reason + "\n";
       continue;
     }
-    if (r.status != CompensationStatus::kOk)
-      out += "; " + label + ": " + compensationStatusName(r.status) + ": " + r.reason + "\n";
+    // Every target named (its name, else its line in the targets file), so a person can find it.
+    out += "; " + label +
+           (r.status == CompensationStatus::kOk
+                ? std::string()
+                : std::string(": ") + compensationStatusName(r.status) + ": " + r.reason) +
+           "\n";
     const auto point = [&](const JointsDeg& q) {
       std::string text = format == OutputFormat::kVal2Moves ? "DO MOVE #PPOINT(" : "#PPOINT(";
       for (int j = 0; j < kJointCount; ++j) text += (j ? ", " : "") + fixed(q[j], 4);

@@ -274,7 +274,8 @@ TEST_CASE("the output never commands a target that cannot be reached") {
   const std::string moves = formatCompensated(file, results, OutputFormat::kVal2Moves);
   CHECK_THAT(moves, Contains("DO MOVE #PPOINT("));
   CHECK_THAT(moves, Contains("; far: unreachable"));
-  CHECK(moves.find("DO MOVE") == moves.rfind("DO MOVE"));  // one move only
+  CHECK(moves.find("DO MOVE") == moves.rfind("DO MOVE"));     // one move only
+  CHECK_THAT(moves, Contains("\n; near\nDO MOVE #PPOINT("));  // every target named
   const std::string points = formatCompensated(file, results, OutputFormat::kVal2Points);
   CHECK_THAT(points, Contains("\n#PPOINT("));
 }
@@ -334,8 +335,9 @@ TEST_CASE("targets are reached as the calibration reached its points: up from a 
   const std::string points =
       formatCompensated(file, with, OutputFormat::kVal2Points, comp.approachDeg());
   CHECK_THAT(points, Contains("\n; pre-point #PPOINT("));
-  // Two header lines, the pre-point comment, the target, the unreachable one's comment.
-  CHECK(std::count(points.begin(), points.end(), '\n') == 5);
+  // Two header lines, the target's name, its pre-point comment, the target, the unreachable one's.
+  CHECK(std::count(points.begin(), points.end(), '\n') == 6);
+  CHECK_THAT(points, Contains("\n; near\n; pre-point #PPOINT("));
   CHECK(points.find("\n#PPOINT(") != std::string::npos);
 
   // An explicit 0 turns it off; a pre-point below a joint's limit is refused, not commanded.

@@ -3,7 +3,8 @@
 //   (x_mm,y_mm,z_mm,rz_deg,ry_deg,rx_deg, optional config) or a program's nominal joints
 //   (j1..j6, controller readings in deg); both take an optional name column;
 // - the output: CSV (name, j1..j6, a1..a6, predicted_error_mm, status, config, note), or VAL II
-//   precision points, `#PPOINT(j1, ..., j6)` or `DO MOVE #PPOINT(...)` lines.
+//   precision points, `#PPOINT(j1, ..., j6)` or `DO MOVE #PPOINT(...)` lines, each after a `;`
+//   comment naming its target (the name column, else "line N" of the targets file).
 // Malformed rows are FormatError naming file:line and the problem.
 #pragma once
 
