@@ -69,11 +69,7 @@ int run(const std::vector<std::string>& argv) {
     if (!tool) throw UsageError("--tool: expected x,y,z,rz,ry,rx (mm, deg)");
     options.tool = *tool;
   }
-  if (args.has("approach-deg")) {
-    options.approach_deg = args.number("approach-deg", 0);
-    if (!(*options.approach_deg >= 0 && *options.approach_deg <= 1))
-      throw UsageError("--approach-deg must be 0 to 1 (deg)");
-  }
+  options.approach_deg = approachDegArg(args);
   const auto format = parseOutputFormat(args.get("format", "csv"));
   if (!format) throw UsageError("--format: expected csv, val2 or val2-move");
   if (!calibrated.covariance)

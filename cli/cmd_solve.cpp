@@ -2,6 +2,7 @@
 // same assessment robocald makes of each shell set), and write the calibrated model only when the
 // fit is usable as a calibration (or --allow-partial), with a report.
 #include "args.hpp"
+#include "model_args.hpp"
 
 #include <robocal/compensation/accuracy_report.hpp>
 #include <robocal/formats/model_json.hpp>
@@ -166,9 +167,7 @@ int run(const std::vector<std::string>& argv) {
     origin.samples_files.push_back(std::filesystem::absolute(path).lexically_normal().string());
   }
   if (samples.empty()) throw UsageError("the samples files hold no samples");
-  origin.approach_deg = args.number("approach-deg", 0);
-  if (!(origin.approach_deg >= 0 && origin.approach_deg <= 1))
-    throw UsageError("--approach-deg must be 0 to 1 (deg)");
+  origin.approach_deg = approachDegArg(args).value_or(0);
   AssessOptions options;
   options.outlier_sigmas = args.number("outlier-sigmas", options.outlier_sigmas);
   if (options.outlier_sigmas <= 0) throw UsageError("--outlier-sigmas must be positive");

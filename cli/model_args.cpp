@@ -41,4 +41,11 @@ Model nominalFor(const Args& args, const Model& calibrated, const char* command,
   return builtin;
 }
 
+std::optional<double> approachDegArg(const Args& args) {
+  if (!args.has("approach-deg")) return std::nullopt;
+  const double deg = args.number("approach-deg", 0);
+  if (!(deg >= 0 && deg <= 1)) throw UsageError("--approach-deg must be 0 to 1 (deg)");
+  return deg;
+}
+
 }  // namespace robocal::cli

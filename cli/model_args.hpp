@@ -10,11 +10,17 @@
 
 #include <robocal/kinematics/model.hpp>
 
+#include <optional>
+
 namespace robocal::cli {
 
 // `command` names the subcommand in notes ("compensate"); `model_key` is the option naming the
 // calibrated model ("model", "calibrated"). Throws UsageError on a --nominal that differs.
 Model nominalFor(const Args& args, const Model& calibrated, const char* command,
                  const char* model_key);
+
+// --approach-deg D: the one-sided approach's pre-point step (ModelProvenance::approach_deg), 0 to
+// 1 deg; nullopt when not given. Throws UsageError out of range.
+std::optional<double> approachDegArg(const Args& args);
 
 }  // namespace robocal::cli

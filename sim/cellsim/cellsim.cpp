@@ -193,6 +193,7 @@ class Cell {
         bar_config_(config.bar),
         truth_(truth.model),
         true_robot_(truth),
+        ideal_(truth.realism.isIdeal()),
         kin_(truth.model),
         rng_(o.seed),
         val_(io, "val", o.val_link, o.val_baud),
@@ -403,7 +404,7 @@ class Cell {
     for (int i = 0; i < 6; ++i) j[i] = joints_[i];
     const Eigen::Vector3d& ball = truth_.balls_mm[connection_.ball_index];
     const Eigen::Vector3d& chuck = truth_.chucks_mm[connection_.chuck_index];
-    if (true_robot_.realism.isIdeal()) return kin_.barLength(j, ball, chuck);
+    if (ideal_) return kin_.barLength(j, ball, chuck);
     return warmKinematics().barLength(true_robot_.effectiveReadings(j, approach_), ball, chuck);
   }
 
@@ -771,6 +772,7 @@ class Cell {
   drivers::BarConfig bar_config_;
   Model truth_;
   TrueRobot true_robot_;
+  bool ideal_;      // the truth is exactly its model: the cold geometry alone
   Kinematics kin_;  // the true geometry, cold
   Approach approach_ = kPositiveApproach;
   mutable std::optional<Kinematics> warm_kin_;

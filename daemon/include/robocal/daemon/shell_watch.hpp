@@ -10,7 +10,7 @@
 // a deflection is the model's ordinary error, which the centring corrects as it goes, and a shell
 // may start anywhere up to it (a floor of 0.3 mm paused ordinary runs whose shells sat at 0.45 mm).
 // A loose ball shows first in the noise of the readings at a point, which is judged from
-// kFloorNoiseMm and at kSpreadJump times the earlier points': a loose ball's play of 0.25 mm (1
+// kFloorNoiseMm and at kNoiseJump times the earlier points': a loose ball's play of 0.25 mm (1
 // sigma) beside a bar's noise of 0.06 mm raised the median spread 3-4x, not the 5x the deflection
 // needs (scripts/pause-seeds.sh), while an ordinary shell's median of five stays within 2x of the
 // run's. Pure decision, no I/O: the run feeds it and pauses on a problem.
@@ -28,8 +28,8 @@ class ShellWatch {
  public:
   static constexpr std::size_t kPoints = 5;           // recent points judged together
   static constexpr std::size_t kBaselinePoints = 10;  // earlier points needed to judge at all
-  static constexpr double kJump = 5.0;        // recent median deflection over the earlier points'
-  static constexpr double kSpreadJump = 2.5;  // the same for the noise of the readings
+  static constexpr double kJump = 5.0;       // recent median deflection over the earlier points'
+  static constexpr double kNoiseJump = 2.5;  // the same for the noise of the readings
   static constexpr double kFloorNoiseMm = 0.03;
 
   // `recentre_mm`: the deflection past which the run re-centres the bar (its soft limit).
@@ -37,15 +37,15 @@ class ShellWatch {
 
   void startShell() {
     for (double v : shell_deflections_) baseline_deflections_.push_back(v);
-    for (double v : shell_spreads_) baseline_spreads_.push_back(v);
+    for (double v : shell_noises_) baseline_noises_.push_back(v);
     shell_deflections_.clear();
-    shell_spreads_.clear();
+    shell_noises_.clear();
   }
 
   // "" while the shell looks like the rest of the run; otherwise what jumped and by how much.
   std::string point(double deflection_mm, double noise_mm) {
     shell_deflections_.push_back(std::abs(deflection_mm));
-    shell_spreads_.push_back(noise_mm);
+    shell_noises_.push_back(noise_mm);
     if (shell_deflections_.size() < kPoints || baseline_deflections_.size() < kBaselinePoints)
       return {};
     const auto judge = [](const std::vector<double>& recent_all, const std::vector<double>& base,
@@ -60,7 +60,7 @@ class ShellWatch {
       return buf;
     };
     std::string problem =
-        judge(shell_spreads_, baseline_spreads_, kFloorNoiseMm, kSpreadJump, "reading noise");
+        judge(shell_noises_, baseline_noises_, kFloorNoiseMm, kNoiseJump, "reading noise");
     if (problem.empty())
       problem = judge(shell_deflections_, baseline_deflections_, floor_deflection_mm_, kJump,
                       "deflection");
@@ -73,8 +73,8 @@ class ShellWatch {
     return v[v.size() / 2];
   }
   double floor_deflection_mm_;
-  std::vector<double> baseline_deflections_, baseline_spreads_;
-  std::vector<double> shell_deflections_, shell_spreads_;
+  std::vector<double> baseline_deflections_, baseline_noises_;
+  std::vector<double> shell_deflections_, shell_noises_;
 };
 
 }  // namespace robocal::daemon
