@@ -54,9 +54,10 @@ std::string realismSummary(const TrueRobot& truth, const std::vector<Sample>& sa
   int joint = 0;
   for (const Sample& s : samples) {
     const auto torque =
-        truth.gravityTorqueNm(s.joints_deg, truth.realism.payload_kg, truth.realism.payload_com_mm);
+        truth.gravityTorqueNm(s.joints_deg, truth.realism.compliance.load.payload_kg,
+                              truth.realism.compliance.load.payload_com_mm);
     for (int j = 0; j < kJointCount; ++j) {
-      const double t = std::abs(truth.realism.compliance_deg_per_nm[j] * torque[j]);
+      const double t = std::abs(truth.realism.compliance.deg_per_nm[j] * torque[j]);
       if (t > twist_deg) twist_deg = t, joint = j + 1;
     }
   }
@@ -67,7 +68,7 @@ std::string realismSummary(const TrueRobot& truth, const std::vector<Sample>& sa
       "with a %.3g kg payload; warm-up %.3g K (tau %.3g min); LVDT gain error %.3g, "
       "nonlinearity %.3g mm; bar length error %.3g",
       *std::max_element(truth.realism.backlash_deg.begin(), truth.realism.backlash_deg.end()),
-      twist_deg, joint, truth.realism.payload_kg, truth.realism.warmup_k,
+      twist_deg, joint, truth.realism.compliance.load.payload_kg, truth.realism.warmup_k,
       truth.realism.warmup_time_constant_min, truth.realism.lvdt_gain_error,
       truth.realism.lvdt_nonlinearity_mm, truth.realism.bar_length_error);
   return buf;

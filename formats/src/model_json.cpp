@@ -1,5 +1,6 @@
 #include <robocal/formats/model_json.hpp>
 
+#include <robocal/formats/compliance_json.hpp>
 #include <robocal/jsonread/strict_json.hpp>
 #include <robocal/kinematics/units.hpp>
 
@@ -320,6 +321,13 @@ Model modelFromJson(const json& root, const std::string& source) {
   const json& chucks = r.array(root, "chucks", kChuckCount);
   for (int c = 0; c < kChuckCount; ++c)
     m.chucks_mm[c] = r.point(chucks[c], "chucks[" + std::to_string(c) + "]");
+  if (const auto it = root.find("compliance"); it != root.end()) {
+    jsonread::Object<FormatError> o(jsonread::Reader<FormatError>(source), *it, "compliance");
+    JointCompliance c;
+    readComplianceKeys(o, c);
+    o.finish();
+    m.compliance = c;
+  }
   if (const auto it = root.find("covariance"); it != root.end())
     m.covariance = covarianceFromJson(r, *it);
   return m;
@@ -363,6 +371,11 @@ nlohmann::ordered_json modelToJson(const Model& m) {
   for (const auto& c : m.chucks_mm) chucks.push_back(ojson::array({c.x(), c.y(), c.z()}));
   out["balls"] = balls;
   out["chucks"] = chucks;
+  if (m.compliance) {
+    ojson compliance = ojson::object();
+    writeComplianceKeys(compliance, *m.compliance);
+    out["compliance"] = compliance;
+  }
   if (m.covariance) out["covariance"] = covarianceToJson(*m.covariance);
   return out;
 }

@@ -31,9 +31,26 @@ Kinematics::Kinematics(const ParamVector& params) : params_(params) {
   }
 }
 
-std::array<Eigen::Isometry3d, 2 * kJointCount + 1> Kinematics::chainFrames(
-    const JointsDeg& readings) const {
-  std::array<Eigen::Isometry3d, 2 * kJointCount + 1> frames;
+Kinematics::Kinematics(const Model& model) : Kinematics(toParams(model)) {
+  if (model.compliance && model.compliance->twists()) compliance_ = model.compliance;
+}
+
+JointsDeg Kinematics::twistedReadings(const JointsDeg& readings) const {
+  if (!compliance_) return readings;
+  const std::array<double, kJointCount> torque_nm =
+      gravityTorqueNm(rigidChainFrames(readings), compliance_->load);
+  JointsDeg q = readings;
+  for (int j = 0; j < kJointCount; ++j)
+    q[j] += compliance_->deg_per_nm[j] * torque_nm[j] / params_[jointParamIndex(j) + 1];
+  return q;
+}
+
+ChainFrames Kinematics::chainFrames(const JointsDeg& readings) const {
+  return rigidChainFrames(twistedReadings(readings));
+}
+
+ChainFrames Kinematics::rigidChainFrames(const JointsDeg& readings) const {
+  ChainFrames frames;
   frames[0] = links_[0].full;
   for (int j = 0; j < kJointCount; ++j) {
     frames[2 * j + 1] = frames[2 * j] * rotZ(theta(params_, j, readings[j]));
@@ -43,9 +60,9 @@ std::array<Eigen::Isometry3d, 2 * kJointCount + 1> Kinematics::chainFrames(
 }
 
 Eigen::Isometry3d Kinematics::toolPose(const JointsDeg& readings) const {
+  const JointsDeg q = twistedReadings(readings);
   Eigen::Isometry3d t = links_[0].full;
-  for (int j = 0; j < kJointCount; ++j)
-    t = t * rotZ(theta(params_, j, readings[j])) * links_[j + 1].full;
+  for (int j = 0; j < kJointCount; ++j) t = t * rotZ(theta(params_, j, q[j])) * links_[j + 1].full;
   return t;
 }
 

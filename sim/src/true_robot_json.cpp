@@ -1,3 +1,4 @@
+#include <robocal/formats/compliance_json.hpp>
 #include <robocal/formats/error.hpp>
 #include <robocal/formats/model_json.hpp>
 #include <robocal/jsonread/strict_json.hpp>
@@ -10,27 +11,6 @@ namespace {
 
 using Object = jsonread::Object<FormatError>;
 using ojson = nlohmann::ordered_json;
-
-// Six numbers in [lo, hi], one per joint.
-void getJoints(Object& o, const std::string& key, std::array<double, kJointCount>& out, double lo,
-               double hi) {
-  const nlohmann::json* v = o.find(key);
-  if (!v) return;
-  const nlohmann::json& a = o.reader().array(*v, o.path(key), kJointCount);
-  for (int j = 0; j < kJointCount; ++j)
-    out[j] = o.reader().number(a[j], jsonread::indexPath(o.path(key), j), lo, hi);
-}
-
-Eigen::Vector3d point(const Object& o, const nlohmann::json& v, const std::string& path) {
-  const nlohmann::json& a = o.reader().array(v, path, 3);
-  Eigen::Vector3d p;
-  for (int i = 0; i < 3; ++i) p[i] = o.reader().number(a[i], jsonread::indexPath(path, i));
-  return p;
-}
-
-ojson vec(const Eigen::Vector3d& p) {
-  return ojson::array({p.x(), p.y(), p.z()});
-}
 
 nlohmann::json parseJsonFile(const std::string& path) {
   const std::string text = readTextFile(path);
@@ -46,22 +26,8 @@ nlohmann::json parseJsonFile(const std::string& path) {
 Realism realismFromJson(const nlohmann::json& json, const std::string& source) {
   Object o(jsonread::Reader<FormatError>(source), json, "realism");
   Realism r;
-  getJoints(o, "backlash_deg", r.backlash_deg, 0, 1);
-  getJoints(o, "compliance_deg_per_nm", r.compliance_deg_per_nm, 0, 0.1);
-  getJoints(o, "link_mass_kg", r.link_mass_kg, 0, 1000);
-  if (const nlohmann::json* v = o.find("link_com_mm")) {
-    const nlohmann::json& a = o.reader().array(*v, o.path("link_com_mm"), kJointCount);
-    for (int j = 0; j < kJointCount; ++j)
-      r.link_com_mm[j] = point(o, a[j], jsonread::indexPath(o.path("link_com_mm"), j));
-  }
-  o.get("payload_kg", r.payload_kg, 0, 1000);
-  if (const nlohmann::json* v = o.find("payload_com_mm"))
-    r.payload_com_mm = point(o, *v, o.path("payload_com_mm"));
-  if (const nlohmann::json* v = o.find("gravity_direction")) {
-    r.gravity_direction = point(o, *v, o.path("gravity_direction"));
-    if (r.gravity_direction.norm() < 1e-9) o.fail("gravity_direction", "must not be zero");
-    r.gravity_direction.normalize();
-  }
+  readJointNumbers(o, "backlash_deg", r.backlash_deg, 0, 1);
+  readComplianceKeys(o, r.compliance);
   o.get("thermal_expansion_per_k", r.thermal_expansion_per_k, 0, 1e-3);
   o.get("warmup_k", r.warmup_k, -50, 50);
   o.get("warmup_time_constant_min", r.warmup_time_constant_min, 1e-3, 1e4);
@@ -74,28 +40,24 @@ Realism realismFromJson(const nlohmann::json& json, const std::string& source) {
 }
 
 ojson realismToJson(const Realism& r) {
-  ojson coms = ojson::array();
-  for (const Eigen::Vector3d& c : r.link_com_mm) coms.push_back(vec(c));
-  return ojson{{"backlash_deg", r.backlash_deg},
-               {"compliance_deg_per_nm", r.compliance_deg_per_nm},
-               {"link_mass_kg", r.link_mass_kg},
-               {"link_com_mm", coms},
-               {"payload_kg", r.payload_kg},
-               {"payload_com_mm", vec(r.payload_com_mm)},
-               {"gravity_direction", vec(r.gravity_direction)},
-               {"thermal_expansion_per_k", r.thermal_expansion_per_k},
-               {"warmup_k", r.warmup_k},
-               {"warmup_time_constant_min", r.warmup_time_constant_min},
-               {"lvdt_gain_error", r.lvdt_gain_error},
-               {"lvdt_nonlinearity_mm", r.lvdt_nonlinearity_mm},
-               {"lvdt_half_travel_mm", r.lvdt_half_travel_mm},
-               {"bar_length_error", r.bar_length_error}};
+  ojson out{{"backlash_deg", r.backlash_deg}};
+  writeComplianceKeys(out, r.compliance);
+  out["thermal_expansion_per_k"] = r.thermal_expansion_per_k;
+  out["warmup_k"] = r.warmup_k;
+  out["warmup_time_constant_min"] = r.warmup_time_constant_min;
+  out["lvdt_gain_error"] = r.lvdt_gain_error;
+  out["lvdt_nonlinearity_mm"] = r.lvdt_nonlinearity_mm;
+  out["lvdt_half_travel_mm"] = r.lvdt_half_travel_mm;
+  out["bar_length_error"] = r.bar_length_error;
+  return out;
 }
 
 TrueRobot loadTruthFile(const std::string& path) {
   const nlohmann::json root = parseJsonFile(path);
   TrueRobot t;
   t.model = modelFromJson(root, path);
+  if (t.model.compliance)
+    throw FormatError(path + ": compliance: a truth's compliance goes in its \"realism\"");
   if (root.is_object())
     if (const auto it = root.find("realism"); it != root.end())
       t.realism = realismFromJson(*it, path);

@@ -67,8 +67,8 @@ TEST_CASE("true robot: the ideal one is exactly its model; each effect has its s
     for (double j2 = -40; j2 <= 220; j2 += 10)
       for (double j3 = -220; j3 <= 40; j3 += 10) {
         const auto t = typical.gravityTorqueNm(joints(0, j2, j3, 0, 30, 0), 1.0,
-                                               typical.realism.payload_com_mm);
-        worst = std::max(worst, std::abs(typical.realism.compliance_deg_per_nm[1] * t[1]));
+                                               typical.realism.compliance.load.payload_com_mm);
+        worst = std::max(worst, std::abs(typical.realism.compliance.deg_per_nm[1] * t[1]));
       }
     CHECK(worst > 0.02);
     CHECK(worst < 0.06);
@@ -129,7 +129,7 @@ TEST_CASE("truth file: realism round-trips, model readers ignore it, bad keys ar
   saveTruthFile(path, t);
   const TrueRobot back = loadTruthFile(path);
   CHECK(back.realism.backlash_deg == t.realism.backlash_deg);
-  CHECK(back.realism.link_com_mm[1] == t.realism.link_com_mm[1]);
+  CHECK(back.realism.compliance.load.link_com_mm[1] == t.realism.compliance.load.link_com_mm[1]);
   CHECK(back.realism.bar_length_error == t.realism.bar_length_error);
   CHECK(back.realism.warmup_k == t.realism.warmup_k);
   CHECK(toParams(loadModelFile(path)) == toParams(t.model));  // a model reader sees the geometry
@@ -143,4 +143,43 @@ TEST_CASE("truth file: realism round-trips, model readers ignore it, bad keys ar
   std::ofstream(path) << j.dump();
   CHECK_THROWS_WITH(loadTruthFile(path), Contains("realism.backlash_deg[2]"));
   std::remove(path);
+}
+
+TEST_CASE("a model with compliance twists its joints as the true robot's compliance does") {
+  const Model rigid = puma560NominalModel();
+  TrueRobot truth{rigid, Realism::ideal()};
+  truth.realism.compliance = Realism::puma560Typical().compliance;
+  Model compliant = rigid;
+  compliant.compliance = truth.realism.compliance;
+  const Kinematics rigid_kin(rigid), compliant_kin(compliant);
+  double largest_mm = 0;
+  for (const JointsDeg& q : {joints(10, 30, -160, 20, 40, 30), joints(-40, 100, -20, 0, 60, 0),
+                             joints(90, -30, -200, -50, -70, 100)}) {
+    const Eigen::Vector3d twisted = compliant_kin.toolPose(q).translation();
+    const Eigen::Vector3d expected =
+        rigid_kin.toolPose(truth.effectiveReadings(q, kPositiveApproach)).translation();
+    CHECK((twisted - expected).norm() < 1e-9);
+    CHECK((compliant_kin.ballPosition(q, rigid.balls_mm[0]) -
+           rigid_kin.ballPosition(compliant_kin.twistedReadings(q), rigid.balls_mm[0]))
+              .norm() < 1e-9);
+    largest_mm = std::max(largest_mm, (twisted - rigid_kin.toolPose(q).translation()).norm());
+  }
+  CHECK(largest_mm > 0.1);  // a few hundredths of a degree at the arm's reach
+
+  SECTION("the model file carries it; a file without it is a rigid arm; bad keys are named") {
+    const Model back = parseModel(formatModel(compliant), "m.json");
+    REQUIRE(back.compliance);
+    CHECK(back.compliance->deg_per_nm == compliant.compliance->deg_per_nm);
+    CHECK(back.compliance->load.payload_kg == compliant.compliance->load.payload_kg);
+    CHECK(back.compliance->load.link_com_mm[2] == compliant.compliance->load.link_com_mm[2]);
+    CHECK_FALSE(parseModel(formatModel(rigid), "m.json").compliance);
+    nlohmann::json j = nlohmann::json::parse(formatModel(compliant));
+    j["compliance"]["payload_kgs"] = 1;
+    CHECK_THROWS_WITH(parseModel(j.dump(), "m.json"),
+                      Contains("m.json: compliance.payload_kgs: unknown key"));
+    j = nlohmann::json::parse(formatModel(compliant));
+    j["compliance"]["compliance_deg_per_nm"][1] = 3;
+    CHECK_THROWS_WITH(parseModel(j.dump(), "m.json"),
+                      Contains("compliance.compliance_deg_per_nm[1]"));
+  }
 }

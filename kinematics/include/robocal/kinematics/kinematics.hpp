@@ -2,9 +2,11 @@
 // with respect to the 54 parameters. No I/O.
 #pragma once
 
+#include <robocal/kinematics/gravity.hpp>
 #include <robocal/kinematics/model.hpp>
 
 #include <array>
+#include <optional>
 
 namespace robocal {
 
@@ -14,17 +16,26 @@ using JointJacobian = Eigen::Matrix<double, 6, kJointCount>;     // d (v, w) / d
 
 // A model's kinematics with the per-link constants precomputed, so that evaluating many poses
 // with the same parameters is cheap. Immutable and thread-safe after construction.
+//
+// Made from a Model that carries gravity compliance, every function below takes the readings to
+// the joint angles the loaded arm has: each joint twisted by its compliance times the gravity
+// torque at the pose (twistedReadings). The parameter and joint Jacobians leave out the torque's
+// own change with the parameters and the readings (a few hundredths of a degree of twist: second
+// order). Made from a ParamVector, the arm is rigid.
 class Kinematics {
  public:
   explicit Kinematics(const ParamVector& params);
-  explicit Kinematics(const Model& model) : Kinematics(toParams(model)) {}
+  explicit Kinematics(const Model& model);
 
   const ParamVector& params() const { return params_; }
+  // The readings a rigid arm with these parameters needs to put its joints where the loaded arm's
+  // are at `readings` (deg): readings + twist / gain. The readings themselves for a rigid arm.
+  JointsDeg twistedReadings(const JointsDeg& readings) const;
 
   // Pose of the last link's frame (after L6) in the global frame.
   Eigen::Isometry3d toolPose(const JointsDeg& readings) const;
   // Frames after each of the 13 factors L0, J1, L1, ..., J6, L6, in the global frame.
-  std::array<Eigen::Isometry3d, 2 * kJointCount + 1> chainFrames(const JointsDeg& readings) const;
+  ChainFrames chainFrames(const JointsDeg& readings) const;
 
   Eigen::Vector3d ballPosition(const JointsDeg& readings, const Eigen::Vector3d& ball_mm) const;
   // Ball position and its analytic Jacobian with respect to all 54 parameters
@@ -50,8 +61,10 @@ class Kinematics {
     Eigen::Isometry3d after_rz;  // Trans * Rz
     Eigen::Isometry3d after_ry;  // Trans * Rz * Ry
   };
+  ChainFrames rigidChainFrames(const JointsDeg& readings) const;
   ParamVector params_;
   std::array<LinkConstants, kLinkCount> links_;
+  std::optional<JointCompliance> compliance_;  // only when it twists
 };
 
 }  // namespace robocal

@@ -42,6 +42,38 @@ struct JointParams {
   double max_deg = 180;
 };
 
+// Gravity compliance (gravity.hpp has the torque): what gravity pulls on, the bodies moved by
+// joints 1..6 and the payload at the tool.
+struct GravityLoad {
+  // Masses (kg) of the bodies moved by joints 1..6 and their centres of mass in the frame after
+  // that joint's link (after L_k, as Corke's mdl_puma560 tabulates them in the DH link frames).
+  std::array<double, kJointCount> link_mass_kg{};
+  std::array<Eigen::Vector3d, kJointCount> link_com_mm = zeros();
+  // The payload at the tool (the ball fixture while calibrating, the work tool after): mass and
+  // centre of mass in the last link's frame.
+  double payload_kg = 0;
+  Eigen::Vector3d payload_com_mm = Eigen::Vector3d::Zero();
+  // Gravity in the world (chuck fixture) frame, a unit vector: down.
+  Eigen::Vector3d gravity_direction = -Eigen::Vector3d::UnitZ();
+
+  static std::array<Eigen::Vector3d, kJointCount> zeros() {
+    std::array<Eigen::Vector3d, kJointCount> z;
+    z.fill(Eigen::Vector3d::Zero());
+    return z;
+  }
+};
+
+// Joint twist per N m of gravity torque, and the load that makes the torque.
+struct JointCompliance {
+  GravityLoad load;
+  std::array<double, kJointCount> deg_per_nm{};
+  bool twists() const {
+    for (double c : deg_per_nm)
+      if (c != 0) return true;
+    return false;
+  }
+};
+
 // Where a calibrated model came from: the fit that made it (docs/model-format.md, "provenance").
 // Written with every calibrated model; carried unchanged through a read and a write; absent from
 // nominal models and from files older than it.
@@ -77,6 +109,9 @@ struct Model {
   // and columns for parameters that were not estimated; files hold it in mm and deg
   // (docs/model-format.md, "covariance"). Absent from nominal models; withParams drops it.
   std::optional<Eigen::MatrixXd> covariance;
+  // Gravity compliance of the joints (docs/model-format.md, "compliance"): Kinematics(model)
+  // evaluates the model at the readings twisted by it. Absent: a rigid arm (and older files).
+  std::optional<JointCompliance> compliance;
   std::array<LinkParams, kLinkCount> links;
   std::array<JointParams, kJointCount> joints;
   std::array<Eigen::Vector3d, kBallCount> balls_mm;    // in the last link's frame (after L6)
@@ -111,8 +146,8 @@ double paramInterfaceValue(const ParamVector& params, int index);
 int paramIndexByName(const std::string& name);
 
 ParamVector toParams(const Model& model);
-// A copy of `base` (names, limits, balls, chucks) with its 54 parameters replaced and no
-// covariance (it belongs to the parameters it came with).
+// A copy of `base` (names, limits, balls, chucks, compliance) with its 54 parameters replaced and
+// no covariance (it belongs to the parameters it came with).
 Model withParams(const Model& base, const ParamVector& params);
 
 // The nominal a calibrated model started from (its provenance's nominal_params), named as it was;

@@ -16,6 +16,7 @@
 // reading would, divided by its gain, which is 1 to 1e-3), at its thermal state.
 #pragma once
 
+#include <robocal/kinematics/gravity.hpp>
 #include <robocal/kinematics/model.hpp>
 
 #include <array>
@@ -25,18 +26,9 @@ namespace robocal {
 struct Realism {
   // Backlash, full width per joint (deg): the angle is off by +/- half of it.
   std::array<double, kJointCount> backlash_deg{};
-  // Gravity compliance: joint twist per N m of gravity torque (deg/(N m)), per joint.
-  std::array<double, kJointCount> compliance_deg_per_nm{};
-  // Masses (kg) of the bodies moved by joints 1..6 and their centres of mass in the frame after
-  // that joint's link (after L_k, as Corke's mdl_puma560 tabulates them in the DH link frames).
-  std::array<double, kJointCount> link_mass_kg{};
-  std::array<Eigen::Vector3d, kJointCount> link_com_mm{};
-  // The payload at the tool (the ball fixture while calibrating): mass and centre of mass in the
-  // last link's frame.
-  double payload_kg = 0;
-  Eigen::Vector3d payload_com_mm = Eigen::Vector3d::Zero();
-  // Gravity in the world (chuck fixture) frame, a unit vector: down.
-  Eigen::Vector3d gravity_direction = -Eigen::Vector3d::UnitZ();
+  // Gravity compliance: joint twist per N m of gravity torque (deg/(N m)), per joint, and the
+  // load (link masses and centres, the payload: the ball fixture while calibrating).
+  JointCompliance compliance;
   // Thermal growth of the link translations L1..L6: alpha * warmup_k * (1 - exp(-t / tau)).
   double thermal_expansion_per_k = 11.7e-6;  // steel
   double warmup_k = 0;
