@@ -38,6 +38,10 @@ unreachable; the last two carry no joints (docs/compensation.md).
   --approach-deg D      reach each target from a pre-point D deg below it in every joint,
                         as the calibration reached its points (backlash then sits where the
                         calibration measured it); 0: no pre-points   [the model's, else 0]
+  --payload-kg M        the work tool's mass (kg) in place of the calibration fixture's, for
+                        a model with its compliance (solve --compliance): the joints' twist
+                        under it is compensated                 [the model's: the fixture's]
+  --payload-com X,Y,Z   its centre of mass, mm in the ball fixture's (last link's) frame
   --format F            csv: name,j1..j6,a1..a6,predicted_error_mm,status,config,note   [csv]
                           (a1..a6: each joint's direction into the target, 1 = up, empty
                           without an approach)
@@ -53,16 +57,19 @@ exit status: 0 every target ok, 1 an unreadable input, 2 a usage error,
 constexpr int kExitSomeNotOk = 3;
 
 int run(const std::vector<std::string>& argv) {
-  const Args args(argv, {"model", "targets", "out", "nominal", "tool", "format", "approach-deg"},
+  const Args args(argv,
+                  {"model", "targets", "out", "nominal", "tool", "format", "approach-deg",
+                   "payload-kg", "payload-com"},
                   {"help"});
   if (args.flag("help")) {
     std::fputs(kHelp, stdout);
     return 0;
   }
-  const Model calibrated = loadModelFile(args.required("model"));
+  Model calibrated = loadModelFile(args.required("model"));
   const std::string targets_path = args.required("targets");
   const std::string out_path = args.required("out");
   const Model nominal = nominalFor(args, calibrated, "compensate", "model");
+  applyPayloadArgs(args, calibrated);
   CompensationOptions options;
   if (args.has("tool")) {
     const auto tool = parsePoseText(args.get("tool", ""));

@@ -47,6 +47,10 @@ no model and exits with 3, unless --allow-partial is given.
   --approach-deg D        the samples' points were each reached moving up by D deg in
                           every joint (the plan's motion.approach_deg): recorded in the
                           model, so that compensate reaches targets the same way  [0]
+  --compliance            identify the gravity compliance of the joints that carry the
+                          arm's weight with the 54 parameters, from the model's load
+                          (its "compliance": link masses, the fixture; docs/accuracy.md);
+                          the calibrated model carries it, and compensate uses it
   --max-iterations N      LM iteration cap                                         [100]
   --json                  one JSON object instead of text
 
@@ -129,6 +133,7 @@ void printText(const FitAssessment& a, const Model& calibrated, size_t files) {
                   o.residual_mm, o.robust_sigmas);
   }
   std::printf("model adequacy: %s\n", a.adequacy.summary().c_str());
+  if (a.compliance) std::printf("gravity compliance: %s\n", a.compliance->summary().c_str());
   std::printf("\nresidual per shell after the fit:\n");
   printShells(a.shells);
   if (a.validation) {
@@ -152,7 +157,7 @@ int run(const std::vector<std::string>& argv) {
   const Args args(argv,
                   {"model", "out", "validate", "report", "outlier-sigmas", "truth",
                    "max-iterations", "cell", "approach-deg"},
-                  {"json", "drop-outliers", "allow-partial", "help"});
+                  {"json", "drop-outliers", "allow-partial", "compliance", "help"});
   if (args.flag("help")) {
     std::fputs(kHelp, stdout);
     return 0;
@@ -172,6 +177,11 @@ int run(const std::vector<std::string>& argv) {
   options.outlier_sigmas = args.number("outlier-sigmas", options.outlier_sigmas);
   if (options.outlier_sigmas <= 0) throw UsageError("--outlier-sigmas must be positive");
   options.drop_outliers = args.flag("drop-outliers");
+  options.identify_compliance = args.flag("compliance");
+  if (options.identify_compliance && !nominal.compliance)
+    throw UsageError("--compliance: the model " + args.required("model") +
+                     " has no \"compliance\" object (link masses and the fixture's: "
+                     "docs/model-format.md)");
   options.solve.max_iterations =
       static_cast<int>(args.integer("max-iterations", options.solve.max_iterations));
   if (options.solve.max_iterations < 1) throw UsageError("--max-iterations must be at least 1");

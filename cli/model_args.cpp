@@ -3,6 +3,7 @@
 #include <robocal/formats/model_json.hpp>
 #include <robocal/kinematics/puma560.hpp>
 
+#include <cmath>
 #include <cstdio>
 
 namespace robocal::cli {
@@ -46,6 +47,31 @@ std::optional<double> approachDegArg(const Args& args) {
   const double deg = args.number("approach-deg", 0);
   if (!(deg >= 0 && deg <= 1)) throw UsageError("--approach-deg must be 0 to 1 (deg)");
   return deg;
+}
+
+void applyPayloadArgs(const Args& args, Model& model) {
+  if (!args.has("payload-kg") && !args.has("payload-com")) return;
+  if (!model.compliance || !model.compliance->twists())
+    throw UsageError(
+        "--payload-kg/--payload-com: the model carries no compliance (its joints' twist under "
+        "gravity): a payload changes nothing without it (robocal solve --compliance)");
+  GravityLoad& load = model.compliance->load;
+  if (args.has("payload-kg")) {
+    load.payload_kg = args.number("payload-kg", 0);
+    if (!(load.payload_kg >= 0 && load.payload_kg <= 1000))
+      throw UsageError("--payload-kg must be 0 to 1000 (kg)");
+  }
+  if (args.has("payload-com")) {
+    const std::string text = args.get("payload-com", "");
+    double x = 0, y = 0, z = 0;
+    char rest = 0;
+    if (std::sscanf(text.c_str(), "%lf,%lf,%lf%c", &x, &y, &z, &rest) != 3 || !std::isfinite(x) ||
+        !std::isfinite(y) || !std::isfinite(z) || std::abs(x) > 1e4 || std::abs(y) > 1e4 ||
+        std::abs(z) > 1e4)
+      throw UsageError("--payload-com: expected x,y,z in mm (the last link's frame), got \"" +
+                       text + "\"");
+    load.payload_com_mm = Eigen::Vector3d(x, y, z);
+  }
 }
 
 }  // namespace robocal::cli

@@ -23,4 +23,10 @@ Model nominalFor(const Args& args, const Model& calibrated, const char* command,
 // 1 deg; nullopt when not given. Throws UsageError out of range.
 std::optional<double> approachDegArg(const Args& args);
 
+// --payload-kg M (0 to 1000) and --payload-com x,y,z (mm, in the last link's frame): the work
+// tool's weight in place of the calibration fixture's, for a model that carries its compliance
+// (robocal solve --compliance). Leaves `model` unchanged when neither is given; throws
+// UsageError on a bad value or a model with no compliance.
+void applyPayloadArgs(const Args& args, Model& model);
+
 }  // namespace robocal::cli

@@ -9,6 +9,7 @@
 # ROBOCAL_CELL: another cell file (e.g. with motion.approach_deg set).
 # ROBOCAL_WHOLE_RANGE=N judges N joint vectors over the arm's whole range instead of the work
 # volume (robocal accuracy --whole-range).
+# ROBOCAL_SOLVE_ARGS: more options for robocal solve (e.g. --compliance).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${ROBOCAL_BUILD_DIR:-$root/build}
@@ -25,7 +26,9 @@ for seed in $(seq 1 "$seeds"); do
     --realism "${ROBOCAL_REALISM:-ideal}" \
     --out "$work/s.csv" --truth-out "$work/truth.json" >/dev/null
   # --allow-partial: a fit the verdict refuses is still measured here (its problems in fit.json).
+  # shellcheck disable=SC2086  # the options are words
   "$bin" solve --model "$model" "$work/s.csv" --out "$work/cal.json" --json --allow-partial \
+    ${ROBOCAL_SOLVE_ARGS:-} \
     >"$work/fit.json" 2>/dev/null
   where=()
   [[ -n ${ROBOCAL_WHOLE_RANGE:-} ]] && where=(--whole-range "$ROBOCAL_WHOLE_RANGE")

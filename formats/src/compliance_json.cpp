@@ -29,7 +29,7 @@ void readJointNumbers(Object& o, const std::string& key, std::array<double, kJoi
 }
 
 void readComplianceKeys(Object& o, JointCompliance& c) {
-  readJointNumbers(o, "compliance_deg_per_nm", c.deg_per_nm, 0, 0.1);
+  readJointNumbers(o, "compliance_deg_per_nm", c.deg_per_nm, -0.1, 0.1);
   GravityLoad& g = c.load;
   readJointNumbers(o, "link_mass_kg", g.link_mass_kg, 0, 1000);
   if (const nlohmann::json* v = o.find("link_com_mm")) {

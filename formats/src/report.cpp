@@ -352,6 +352,19 @@ nlohmann::ordered_json fitSummaryJson(const FitAssessment& a) {
       {"lack_of_fit_mm", a.adequacy.unmodelled_mm},
       {"summary", a.adequacy.summary()},
       {"patterns", patterns}};
+  if (a.compliance) {
+    const ComplianceEstimate& c = *a.compliance;
+    ojson joints = ojson::array();
+    for (int j : c.joints)
+      joints.push_back({{"joint", j + 1},
+                        {"deg_per_nm", c.compliance.deg_per_nm[j]},
+                        {"sigma_deg_per_nm", c.sigma_deg_per_nm[j]}});
+    out["compliance"] = {{"joints", joints},
+                         {"largest_twist_deg", c.largest_twist_deg},
+                         {"largest_twist_sigma_deg", c.largest_twist_sigma_deg},
+                         {"payload_kg", c.compliance.load.payload_kg},
+                         {"summary", c.summary()}};
+  }
   ojson outliers = ojson::array();
   for (const FlaggedOutlier& o : a.outliers) {
     ojson j = sampleRef(o.sample);

@@ -91,6 +91,8 @@ std::optional<Model> recordedNominal(const Model& calibrated) {
   Model nominal = withParams(calibrated, *calibrated.provenance->nominal_params);
   nominal.name = calibrated.provenance->nominal_name;
   nominal.provenance.reset();
+  // The controller's model is rigid: the calibration's load, no twist (a fit identifies it).
+  if (nominal.compliance) nominal.compliance->deg_per_nm = {};
   return nominal;
 }
 

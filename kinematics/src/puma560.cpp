@@ -1,3 +1,4 @@
+#include <robocal/kinematics/gravity.hpp>
 #include <robocal/kinematics/puma560.hpp>
 
 namespace robocal {
@@ -42,6 +43,9 @@ Model puma560NominalModel() {
                 Eigen::Vector3d(-30.0, -51.96, 110.0)};
   m.chucks_mm = {Eigen::Vector3d(-43.3, -75.0, 0.0), Eigen::Vector3d(-43.3, 75.0, 0.0),
                  Eigen::Vector3d(86.6, 0.0, 0.0)};
+  // What gravity pulls on (the fixture: 1 kg, 60 mm past the flange), with no compliance: a rigid
+  // arm until a fit identifies it (robocal solve --compliance).
+  m.compliance = JointCompliance{puma560GravityLoad(1.0, Eigen::Vector3d(0, 0, 60)), {}};
   return m;
 }
 

@@ -56,8 +56,9 @@ TrueRobot loadTruthFile(const std::string& path) {
   const nlohmann::json root = parseJsonFile(path);
   TrueRobot t;
   t.model = modelFromJson(root, path);
-  if (t.model.compliance)
+  if (t.model.compliance && t.model.compliance->twists())
     throw FormatError(path + ": compliance: a truth's compliance goes in its \"realism\"");
+  t.model.compliance.reset();  // the realism twists the true robot, not its model
   if (root.is_object())
     if (const auto it = root.find("realism"); it != root.end())
       t.realism = realismFromJson(*it, path);

@@ -84,7 +84,16 @@ FitAssessment assessFit(const Model& nominal, std::vector<Sample> samples,
   FitAssessment a;
   a.nominal = nominal;
   a.outlier_sigmas = options.outlier_sigmas;
-  a.fit = solveCalibration(nominal, samples, options.solve);
+  // The start of the fit: the nominal, with the identified compliance when it is identified.
+  Model start = nominal;
+  const auto fitSamples = [&](const std::vector<Sample>& fitted) {
+    if (!options.identify_compliance) return solveCalibration(nominal, fitted, options.solve);
+    a.compliance.emplace();
+    SolveResult fit = solveWithCompliance(nominal, fitted, options.solve, *a.compliance);
+    start.compliance = a.compliance->compliance;
+    return fit;
+  };
+  a.fit = fitSamples(samples);
   const std::vector<Outlier> outliers = findOutliers(a.fit.residuals, options.outlier_sigmas);
   for (const Outlier& o : outliers)
     a.outliers.push_back({samples[o.index], o.residual_mm, o.robust_sigmas});
@@ -99,10 +108,10 @@ FitAssessment assessFit(const Model& nominal, std::vector<Sample> samples,
     }
     samples.swap(kept);
     a.outliers_dropped = true;
-    a.fit = solveCalibration(nominal, samples, options.solve);
+    a.fit = fitSamples(samples);
   }
   a.samples = std::move(samples);
-  a.calibrated = withParams(nominal, a.fit.params);
+  a.calibrated = withParams(start, a.fit.params);
   a.calibrated.provenance.reset();  // the nominal's, if it had one, is not this model's
 
   const std::vector<double> errors = predictedBallErrors(a.calibrated, a.fit.covariance, a.samples);

@@ -64,7 +64,9 @@ ResidualStats residualStats(const Eigen::VectorXd& r) {
 
 const Identifiability* IdentifiabilityCache::find(const Model& start,
                                                   const std::vector<Sample>& samples) {
-  if (!valid_ || samples.size() != poses_.size() || toParams(start) != params_) return nullptr;
+  if (!valid_ || samples.size() != poses_.size() || toParams(start) != params_ ||
+      start.compliance != compliance_)
+    return nullptr;
   for (int b = 0; b < kBallCount; ++b)
     if (start.balls_mm[b] != balls_mm_[b]) return nullptr;
   for (int c = 0; c < kChuckCount; ++c)
@@ -83,6 +85,7 @@ const Identifiability* IdentifiabilityCache::find(const Model& start,
 void IdentifiabilityCache::store(const Model& start, const std::vector<Sample>& samples,
                                  Identifiability analysis) {
   params_ = toParams(start);
+  compliance_ = start.compliance;
   balls_mm_ = start.balls_mm;
   chucks_mm_ = start.chucks_mm;
   poses_.clear();

@@ -23,6 +23,8 @@ BarLengthModel::BarLengthModel(const Model& fixtures, const ParamVector& p)
     offset_rad_[j] = p[jointParamIndex(j)];
     gain_[j] = p[jointParamIndex(j) + 1];
   }
+  if (fixtures.compliance && fixtures.compliance->twists())
+    loaded_.emplace(withParams(fixtures, p));
 }
 
 template <bool kGradient>
@@ -36,8 +38,9 @@ double BarLengthModel::evaluate(const Sample& s, double* gradient) const {
   std::array<Eigen::Vector3d, kJointCount> axis;
   std::array<Eigen::Matrix3d, kJointCount> after_joint;
   origin[0] = t;
+  const JointsDeg q = loaded_ ? loaded_->twistedReadings(s.joints_deg) : s.joints_deg;
   for (int j = 0; j < kJointCount; ++j) {
-    const double theta = offset_rad_[j] + gain_[j] * s.joints_deg[j] * kRadPerDeg;
+    const double theta = offset_rad_[j] + gain_[j] * q[j] * kRadPerDeg;
     const double c = std::cos(theta), sn = std::sin(theta);
     if (kGradient) axis[j] = rot.col(2);
     const Eigen::Vector3d x = c * rot.col(0) + sn * rot.col(1);

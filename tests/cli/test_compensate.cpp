@@ -226,3 +226,50 @@ TEST_CASE("[cli] a true robot that is not its model: simulate --realism, judged 
   // Backlash, compliance, warm-up and the LVDT's errors are error the model cannot remove.
   CHECK(compensated_rms[1] > 1.3 * compensated_rms[0]);
 }
+
+TEST_CASE(
+    "[cli] compensate with a model's compliance: the twist corrected, the work tool's "
+    "payload weighs more") {
+  TempDir dir;
+  nlohmann::json model = nlohmann::json::parse(readFile(kModel));
+  model["compliance"]["compliance_deg_per_nm"] = {0, 0.0007, 0.0015, 0, 0, 0};
+  writeFile(dir / "compliant.json", model.dump());
+  writeFile(dir / "program.csv",
+            "name,j1,j2,j3,j4,j5,j6\na,10,30,-160,20,40,30\n"
+            "b,-40,100,-20,0,60,0\n");
+  // The joint-2 correction of each row of a compensate run (deg).
+  const auto corrections = [&](const std::string& more) {
+    const RunResult r =
+        runRobocal("compensate --model " + dir / "compliant.json" + " --nominal " + kModel +
+                   " --targets " + dir / "program.csv" + " --out " + dir / "out.csv" + more);
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    std::istringstream lines(readFile(dir / "out.csv"));
+    std::string line;
+    std::getline(lines, line);
+    std::vector<double> out;
+    for (const double nominal_j2 : {30.0, 100.0}) {
+      REQUIRE(std::getline(lines, line));
+      out.push_back(*robocal::csv::number(robocal::csv::splitFields(line)[2]) - nominal_j2);
+    }
+    return out;
+  };
+  const std::vector<double> fixture = corrections("");
+  const std::vector<double> heavy = corrections(" --payload-kg 10 --payload-com 0,0,120");
+  for (size_t i = 0; i < fixture.size(); ++i) {
+    CHECK(std::abs(fixture[i]) > 0.002);  // the twist under the arm's own weight, taken out
+    CHECK(std::abs(heavy[i]) > std::abs(fixture[i]) + 0.002);
+  }
+
+  SECTION("a payload for a rigid model, or a bad centre, is refused and says why") {
+    RunResult r = runRobocal("compensate --model " + kModel + " --targets " + dir / "program.csv" +
+                             " --out " + dir / "rigid.csv --payload-kg 5");
+    CHECK(r.exit_code == 2);
+    CHECK_THAT(r.output, Contains("the model carries no compliance"));
+    r = runRobocal("compensate --model " + dir / "compliant.json" + " --nominal " + kModel +
+                   " --targets " + dir / "program.csv" + " --out " + dir / "bad.csv" +
+                   " --payload-com 0,60");
+    CHECK(r.exit_code == 2);
+    CHECK_THAT(r.output, Contains("--payload-com: expected x,y,z in mm"));
+  }
+}

@@ -172,7 +172,10 @@ TEST_CASE("a model with compliance twists its joints as the true robot's complia
     CHECK(back.compliance->deg_per_nm == compliant.compliance->deg_per_nm);
     CHECK(back.compliance->load.payload_kg == compliant.compliance->load.payload_kg);
     CHECK(back.compliance->load.link_com_mm[2] == compliant.compliance->load.link_com_mm[2]);
-    CHECK_FALSE(parseModel(formatModel(rigid), "m.json").compliance);
+    Model older = rigid;  // a file from before the key
+    older.compliance.reset();
+    CHECK(formatModel(older).find("compliance") == std::string::npos);
+    CHECK_FALSE(parseModel(formatModel(older), "m.json").compliance);
     nlohmann::json j = nlohmann::json::parse(formatModel(compliant));
     j["compliance"]["payload_kgs"] = 1;
     CHECK_THROWS_WITH(parseModel(j.dump(), "m.json"),

@@ -1,7 +1,8 @@
 // The keys of a joint compliance, shared by the model file's "compliance" object
 // (docs/model-format.md) and a truth's "realism" (docs/realism.md), so the two read the same:
-//   compliance_deg_per_nm [6] (0 to 0.1), link_mass_kg [6] (0 to 1000), link_com_mm [6][3],
-//   payload_kg (0 to 1000), payload_com_mm [3], gravity_direction [3] (normalised, not zero).
+//   compliance_deg_per_nm [6] (-0.1 to 0.1: a fitted one may be a little below 0), link_mass_kg [6]
+//   (0 to 1000), link_com_mm [6][3], payload_kg (0 to 1000), payload_com_mm [3], gravity_direction
+//   [3] (normalised, not zero).
 #pragma once
 
 #include <robocal/formats/error.hpp>

@@ -56,6 +56,7 @@ struct GravityLoad {
   // Gravity in the world (chuck fixture) frame, a unit vector: down.
   Eigen::Vector3d gravity_direction = -Eigen::Vector3d::UnitZ();
 
+  bool operator==(const GravityLoad&) const = default;
   static std::array<Eigen::Vector3d, kJointCount> zeros() {
     std::array<Eigen::Vector3d, kJointCount> z;
     z.fill(Eigen::Vector3d::Zero());
@@ -67,6 +68,7 @@ struct GravityLoad {
 struct JointCompliance {
   GravityLoad load;
   std::array<double, kJointCount> deg_per_nm{};
+  bool operator==(const JointCompliance&) const = default;
   bool twists() const {
     for (double c : deg_per_nm)
       if (c != 0) return true;
@@ -150,8 +152,9 @@ ParamVector toParams(const Model& model);
 // no covariance (it belongs to the parameters it came with).
 Model withParams(const Model& base, const ParamVector& params);
 
-// The nominal a calibrated model started from (its provenance's nominal_params), named as it was;
-// empty for a nominal model and for a calibrated file older than the record.
+// The nominal a calibrated model started from (its provenance's nominal_params), named as it was,
+// rigid (a compliance's load kept, its twist zero); empty for a nominal model and for a
+// calibrated file older than the record.
 std::optional<Model> recordedNominal(const Model& calibrated);
 // Where two models' 54 parameters differ by more than rounding (1e-6 mm, deg or gain), the first
 // such parameter in words ("L2.x is 431.8 mm here, 431.9 mm there"); empty when they agree.

@@ -13,7 +13,8 @@ std::array<DHRow, kJointCount> puma560CorkeDH();
 
 // The nominal PUMA 560 of a robocal cell: Lloyd's DH table, the joint-1 frame at shoulder height
 // placed relative to the chuck fixture, the flange 56.25 mm past the wrist centre, the three
-// balls on a tool fixture and the three chucks on the table fixture, and Corke's joint limits.
+// balls on a tool fixture and the three chucks on the table fixture, Corke's joint limits, and the
+// links' and the fixture's weights with no compliance (a rigid arm: see gravity.hpp).
 Model puma560NominalModel();
 
 }  // namespace robocal

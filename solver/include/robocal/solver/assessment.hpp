@@ -14,6 +14,7 @@
 #include <robocal/kinematics/sample.hpp>
 #include <robocal/solver/adequacy.hpp>
 #include <robocal/solver/calibrate.hpp>
+#include <robocal/solver/compliance_fit.hpp>
 #include <robocal/solver/verdict.hpp>
 
 #include <optional>
@@ -39,6 +40,9 @@ struct AssessOptions {
   std::optional<HeldOutSamples> validation;
   std::optional<Model> truth;  // a simulation's true robot
   VerdictLimits verdict;       // what makes the fit unusable (verdict.hpp)
+  // Identify the gravity compliance of the loaded joints with the 54 parameters, from the
+  // nominal's load (compliance_fit.hpp); the nominal must carry one.
+  bool identify_compliance = false;
 };
 
 // One of the 54 parameters, in interface units: mm, deg, or a unitless gain (paramName and
@@ -106,6 +110,8 @@ struct FitAssessment {
   std::vector<std::string> problems;
   // Whether the residual follows a pattern of error the model does not contain (adequacy.hpp).
   Adequacy adequacy;
+  // The identified compliance (AssessOptions::identify_compliance), also in calibrated.compliance.
+  std::optional<ComplianceEstimate> compliance;
   std::optional<ValidationResult> validation;
   std::optional<TruthComparison> truth;  // at the validation samples' poses, else the fitted ones
 };

@@ -23,12 +23,12 @@ namespace robocal {
 // The identifiability analysis of a start point and a set of sample poses, kept across fits.
 // solveCalibration analyses the column-scaled Jacobian at the start point (identifiability.hpp),
 // a QR of the m x 54 Jacobian and an SVD: at ~800 samples that is as much work as the whole fit.
-// The Jacobian at the start point depends only on the start model's 54 parameters, its balls and
-// chucks, and each sample's joint readings, ball and chuck, not on the measured lengths. A cache
-// passed in SolveOptions reuses the analysis when all of these are exactly the same as in the fit
-// that stored it (refits of the same poses with new lengths), and
-// replaces it otherwise, so a stale analysis is never used. The result is then the same as
-// without the cache. One entry; not thread-safe: one cache per thread of fits.
+// The Jacobian at the start point depends only on the start model's 54 parameters, compliance,
+// balls and chucks, and each sample's joint readings, ball and chuck, not on the measured lengths.
+// A cache passed in SolveOptions reuses the analysis when all of these are exactly the same as in
+// the fit that stored it (refits of the same poses with new lengths), and replaces it otherwise, so
+// a stale analysis is never used. The result is then the same as without the cache. One entry; not
+// thread-safe: one cache per thread of fits.
 class IdentifiabilityCache {
  public:
   // The analysis stored for exactly this start point and these poses (counted as a hit), or null.
@@ -46,6 +46,7 @@ class IdentifiabilityCache {
   };
   bool valid_ = false;
   ParamVector params_ = ParamVector::Zero();
+  std::optional<JointCompliance> compliance_;
   std::array<Eigen::Vector3d, kBallCount> balls_mm_{};
   std::array<Eigen::Vector3d, kChuckCount> chucks_mm_{};
   std::vector<Pose> poses_;

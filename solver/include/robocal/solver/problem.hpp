@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <optional>
 #include <vector>
 
 namespace robocal {
@@ -16,7 +17,9 @@ namespace robocal {
 // The per-link constants are made once; per sample, each joint rotation turns two columns of the
 // frame by (cos, sin) instead of a general 4x4 product, and the gradient is taken as
 // u . (axis x lever) = axis . (lever x u) from the frames of the forward pass, without the
-// 3 x 54 position Jacobian. evaluateProblem uses it; the benchmark gives it to Ceres too.
+// 3 x 54 position Jacobian. evaluateProblem uses it; the benchmark gives it to Ceres too. A model
+// with gravity compliance (Model::compliance) is evaluated at the twisted readings, as Kinematics
+// does; its gradient leaves out the twist's own change with the parameters (second order).
 class BarLengthModel {
  public:
   BarLengthModel(const Model& fixtures, const ParamVector& params);
@@ -38,6 +41,9 @@ class BarLengthModel {
   std::array<double, kJointCount> offset_rad_{}, gain_{};
   std::array<Eigen::Vector3d, kBallCount> balls_mm_;
   std::array<Eigen::Vector3d, kChuckCount> chucks_mm_;
+  // The model with its compliance, when it twists: each sample's readings are twisted by it
+  // (Kinematics::twistedReadings) before the rigid chain is evaluated.
+  std::optional<Kinematics> loaded_;
 };
 
 // Fills residuals (n) and, when jacobian is not null, the n x 54 Jacobian. The balls and chucks

@@ -1,0 +1,49 @@
+// Gravity compliance identified with the 54 parameters (docs/accuracy.md, "Compliance"): the
+// twist per N m of the joints that carry the arm's weight, from the same ball-bar samples, with the
+// load (link masses and centres, the fixture) as input (Model::compliance's load).
+//
+// Over a calibration's shells a joint's twist follows its gravity torque, which changes slowly
+// with the pose: the joint offsets and gains absorb most of it, and what they cannot absorb is
+// what identifies it. The fit is a variable projection: for a compliance c the 54 parameters are
+// fitted (solveCalibration, the model evaluated at the twisted readings), and c moves along the
+// Gauss-Newton step of those fits' residuals, whose Jacobian is taken by differences (one fit per
+// joint). The residual is nearly linear in c: two steps reach it. Its covariance is the fit's
+// sigma^2 (J^T J)^-1 with J that projected Jacobian: what the data say about c once the 54
+// parameters have taken what they can. Math only.
+#pragma once
+
+#include <robocal/solver/calibrate.hpp>
+
+#include <array>
+#include <string>
+#include <vector>
+
+namespace robocal {
+
+struct ComplianceEstimate {
+  JointCompliance compliance;  // the start's load, with the identified twist per N m
+  // 1-sigma of each joint's twist per N m (deg/(N m)); 0 for the joints not identified.
+  std::array<double, kJointCount> sigma_deg_per_nm{};
+  std::vector<int> joints;  // identified (0-based), those carrying the weight
+  // The largest twist over the samples' poses (deg) and its 1-sigma: what the compliance means.
+  double largest_twist_deg = 0;
+  double largest_twist_sigma_deg = 0;
+  int fits = 0;  // solveCalibration calls
+  // In words: "joint 2 0.00071 +/- 0.00004, joint 3 0.0015 +/- 0.0001 deg/(N m): up to 0.031
+  // +/- 0.002 deg of twist at these poses".
+  std::string summary() const;
+};
+
+// The joints a compliance is identified for: those whose gravity torque over the samples' poses
+// has an RMS of at least a tenth of the largest joint's (joints 2 and 3 of a PUMA), from the
+// start model's load.
+std::vector<int> loadedJoints(const Model& start, const std::vector<Sample>& samples);
+
+// Fits the 54 parameters and the loaded joints' compliance from `start`, whose compliance gives
+// the load (and the starting twist): the fit of the 54 at the identified compliance, which
+// `estimate` receives. Throws std::invalid_argument when `start` has no compliance load, and as
+// solveCalibration does.
+SolveResult solveWithCompliance(const Model& start, const std::vector<Sample>& samples,
+                                const SolveOptions& options, ComplianceEstimate& estimate);
+
+}  // namespace robocal

@@ -1,0 +1,123 @@
+#include <robocal/solver/compliance_fit.hpp>
+
+#include <robocal/kinematics/gravity.hpp>
+#include <robocal/kinematics/kinematics.hpp>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+namespace robocal {
+namespace {
+
+// Each sample's gravity torque (N m) at the start model's rigid pose.
+std::vector<std::array<double, kJointCount>> torques(const Model& start,
+                                                     const std::vector<Sample>& samples) {
+  const Kinematics rigid(toParams(start));
+  std::vector<std::array<double, kJointCount>> out;
+  out.reserve(samples.size());
+  for (const Sample& s : samples)
+    out.push_back(gravityTorqueNm(rigid.chainFrames(s.joints_deg), start.compliance->load));
+  return out;
+}
+
+std::array<double, kJointCount> rmsTorques(const std::vector<std::array<double, kJointCount>>& t) {
+  std::array<double, kJointCount> rms{};
+  for (const auto& row : t)
+    for (int j = 0; j < kJointCount; ++j) rms[j] += row[j] * row[j];
+  for (double& r : rms) r = std::sqrt(r / std::max<std::size_t>(1, t.size()));
+  return rms;
+}
+
+}  // namespace
+
+std::string ComplianceEstimate::summary() const {
+  if (joints.empty()) return "no joint carries the arm's weight at these poses: none identified";
+  std::string out;
+  char buf[160];
+  for (int j : joints) {
+    std::snprintf(buf, sizeof buf, "%sjoint %d %.3g +/- %.2g", out.empty() ? "" : ", ", j + 1,
+                  compliance.deg_per_nm[j], sigma_deg_per_nm[j]);
+    out += buf;
+  }
+  std::snprintf(buf, sizeof buf, " deg/(N m): up to %.3f +/- %.3f deg of twist at these poses",
+                largest_twist_deg, largest_twist_sigma_deg);
+  return out + buf;
+}
+
+std::vector<int> loadedJoints(const Model& start, const std::vector<Sample>& samples) {
+  if (!start.compliance) return {};
+  const auto rms = rmsTorques(torques(start, samples));
+  const double largest = *std::max_element(rms.begin(), rms.end());
+  std::vector<int> joints;
+  for (int j = 0; j < kJointCount; ++j)
+    if (largest > 0 && rms[j] >= 0.1 * largest) joints.push_back(j);
+  return joints;
+}
+
+SolveResult solveWithCompliance(const Model& start, const std::vector<Sample>& samples,
+                                const SolveOptions& options, ComplianceEstimate& out) {
+  if (!start.compliance)
+    throw std::invalid_argument(
+        "the model has no compliance load (link masses, the fixture): add a \"compliance\" object "
+        "(docs/model-format.md)");
+  out = {};
+  out.joints = loadedJoints(start, samples);
+  const auto tau = torques(start, samples);
+  const auto rms = rmsTorques(tau);
+  Model model = start;
+  const auto fitAt = [&](const std::array<double, kJointCount>& twist) {
+    model.compliance->deg_per_nm = twist;
+    ++out.fits;
+    return solveCalibration(model, samples, options);
+  };
+  std::array<double, kJointCount> twist = start.compliance->deg_per_nm;
+  const Eigen::Index m = static_cast<Eigen::Index>(samples.size());
+  const Eigen::Index k = static_cast<Eigen::Index>(out.joints.size());
+  SolveResult fit = fitAt(twist);
+  const ResidualStats before = fit.before;  // the start's, with the start's twist
+  Eigen::MatrixXd jac(m, k);
+  if (k > 0) {
+    // The Jacobian of the fitted residuals by differences, each step a 1e-3 deg RMS twist.
+    for (Eigen::Index c = 0; c < k; ++c) {
+      const int j = out.joints[c];
+      const double step = 1e-3 / rms[j];
+      std::array<double, kJointCount> moved = twist;
+      moved[j] += step;
+      jac.col(c) = (fitAt(moved).residuals - fit.residuals) / step;
+    }
+    // Two Gauss-Newton steps on it (the residual is nearly linear in the twist).
+    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(jac);
+    for (int step = 0; step < 2; ++step) {
+      const Eigen::VectorXd delta = qr.solve(-fit.residuals);
+      for (Eigen::Index c = 0; c < k; ++c) twist[out.joints[c]] += delta[c];
+      fit = fitAt(twist);
+    }
+    const Eigen::MatrixXd cov =
+        fit.sigma_mm * fit.sigma_mm *
+        (jac.transpose() * jac).ldlt().solve(Eigen::MatrixXd::Identity(k, k));
+    for (Eigen::Index c = 0; c < k; ++c)
+      out.sigma_deg_per_nm[out.joints[c]] = std::sqrt(std::max(0.0, cov(c, c)));
+    // The largest twist over the samples and its sigma (the twist's gradient in c is the torque).
+    for (const auto& t : tau) {
+      double twist_deg = 0;
+      Eigen::VectorXd g(k);
+      for (Eigen::Index c = 0; c < k; ++c) {
+        g[c] = t[out.joints[c]];
+        twist_deg += twist[out.joints[c]] * g[c];
+      }
+      if (std::abs(twist_deg) > std::abs(out.largest_twist_deg)) {
+        out.largest_twist_deg = twist_deg;
+        out.largest_twist_sigma_deg = std::sqrt(std::max(0.0, g.dot(cov * g)));
+      }
+    }
+  }
+  out.compliance = *start.compliance;
+  out.compliance.deg_per_nm = twist;
+  fit.before = before;
+  return fit;
+}
+
+}  // namespace robocal
