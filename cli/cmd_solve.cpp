@@ -50,7 +50,8 @@ no model and exits with 3, unless --allow-partial is given.
   --compliance            identify the gravity compliance of the joints that carry the
                           arm's weight with the 54 parameters, from the model's load
                           (its "compliance": link masses, the fixture; docs/accuracy.md);
-                          the calibrated model carries it, and compensate uses it
+                          kept when the data tell it from noise: the calibrated model
+                          carries it, and compensate uses it
   --max-iterations N      LM iteration cap                                         [100]
   --json                  one JSON object instead of text
 

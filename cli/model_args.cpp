@@ -15,6 +15,7 @@ Model nominalFor(const Args& args, const Model& calibrated, const char* command,
   if (args.has("nominal")) {
     const std::string path = args.get("nominal", "");
     Model given = loadModelFile(path);
+    if (given.compliance) given.compliance->deg_per_nm = {};  // the controller's model is rigid
     if (recorded) {
       if (const auto difference = parameterDifference(given, *recorded))
         throw UsageError("--nominal " + path + " is not the nominal " + model_path +
@@ -53,13 +54,14 @@ void applyPayloadArgs(const Args& args, Model& model) {
   if (!args.has("payload-kg") && !args.has("payload-com")) return;
   if (!model.compliance || !model.compliance->twists())
     throw UsageError(
-        "--payload-kg/--payload-com: the model carries no compliance (its joints' twist under "
-        "gravity): a payload changes nothing without it (robocal solve --compliance)");
+        "--payload-kg/--payload-com: the model " + args.get("model", "") +
+        " carries no compliance (its joints' twist under gravity): a payload changes nothing "
+        "without it (robocal solve --compliance)");
   GravityLoad& load = model.compliance->load;
   if (args.has("payload-kg")) {
     load.payload_kg = args.number("payload-kg", 0);
     if (!(load.payload_kg >= 0 && load.payload_kg <= 1000))
-      throw UsageError("--payload-kg must be 0 to 1000 (kg)");
+      throw UsageError("--payload-kg must be 0 to 1000 (kg), got " + args.get("payload-kg", ""));
   }
   if (args.has("payload-com")) {
     const std::string text = args.get("payload-com", "");

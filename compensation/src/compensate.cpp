@@ -103,8 +103,10 @@ double Compensator::predictedOrientationError(const JointsDeg& q) const {
     ParamVector plus = p0, minus = p0;
     plus[estimated_[k]] += kStep;
     minus[estimated_[k]] -= kStep;
-    const Eigen::Matrix3d rp = Kinematics(plus).toolPose(q).linear();
-    const Eigen::Matrix3d rm = Kinematics(minus).toolPose(q).linear();
+    const Eigen::Matrix3d rp =
+        Kinematics(withParams(calibrated_.model(), plus)).toolPose(q).linear();
+    const Eigen::Matrix3d rm =
+        Kinematics(withParams(calibrated_.model(), minus)).toolPose(q).linear();
     const Eigen::AngleAxisd dp(rp * r0.transpose()), dm(rm * r0.transpose());
     j.col(k) = (dp.axis() * dp.angle() - dm.axis() * dm.angle()) / (2 * kStep);
   }

@@ -1,5 +1,7 @@
 #include <robocal/formats/compliance_json.hpp>
 
+#include <cmath>
+
 namespace robocal {
 namespace {
 
@@ -42,7 +44,9 @@ void readComplianceKeys(Object& o, JointCompliance& c) {
     g.payload_com_mm = point(o, *v, o.path("payload_com_mm"));
   if (const nlohmann::json* v = o.find("gravity_direction")) {
     g.gravity_direction = point(o, *v, o.path("gravity_direction"));
-    if (g.gravity_direction.norm() < 1e-9) o.fail("gravity_direction", "must not be zero");
+    const double norm = g.gravity_direction.norm();
+    if (!(norm >= 1e-9 && std::isfinite(norm)))
+      o.fail("gravity_direction", "expected a direction: not zero, not too large to normalise");
     g.gravity_direction.normalize();
   }
 }

@@ -357,9 +357,12 @@ nlohmann::ordered_json fitSummaryJson(const FitAssessment& a) {
     ojson joints = ojson::array();
     for (int j : c.joints)
       joints.push_back({{"joint", j + 1},
-                        {"deg_per_nm", c.compliance.deg_per_nm[j]},
+                        {"deg_per_nm", c.fitted_deg_per_nm[j]},
                         {"sigma_deg_per_nm", c.sigma_deg_per_nm[j]}});
-    out["compliance"] = {{"joints", joints},
+    out["compliance"] = {{"identified", c.identified},
+                         {"chi2", c.chi2},
+                         {"chi2_threshold", c.chi2_threshold},
+                         {"joints", joints},
                          {"largest_twist_deg", c.largest_twist_deg},
                          {"largest_twist_sigma_deg", c.largest_twist_sigma_deg},
                          {"payload_kg", c.compliance.load.payload_kg},

@@ -160,6 +160,11 @@ std::string headerComment(const Model& model, const UrdfOptions& options,
   for (int j = 0; j < kJointCount; ++j)
     out += "    " + commentText(joints[j]) + " gain " + number(model.joints[j].gain) +
            (model.joints[j].gain == 1.0 ? "" : "   (not 1)") + "\n";
+  if (model.compliance && model.compliance->twists())
+    out +=
+        "  Gravity compliance (URDF cannot hold it): the model's joints twist under gravity by\n"
+        "  compliance * torque (docs/model-format.md, \"Compliance\"); this URDF is the rigid\n"
+        "  arm, off by that twist: evaluate the model file with robocal for the loaded arm.\n";
   if (unit_gains)
     out += "  Every gain is 1: the URDF joint value is the controller's reading in radians.\n";
   else

@@ -43,6 +43,7 @@ Model perturbModel(const Model& nominal, const PerturbationSigmas& s, std::mt199
   for (int i = 0; i < kParamCount; ++i) p[i] += sigma[i] * unit(rng);
   Model truth = withParams(nominal, p);
   truth.name = nominal.name + " (simulated truth)";
+  truth.compliance.reset();  // a true robot twists by its realism (true_robot.hpp), not its model
   return truth;
 }
 

@@ -13,14 +13,6 @@
 namespace robocal {
 namespace {
 
-// Upper quantiles of the chi-square distribution, at 1e-3 and 1e-2 (1 to 6 degrees of freedom).
-double chi2Quantile(int dof, double false_alarm) {
-  static constexpr double k1e3[] = {10.828, 13.816, 16.266, 18.467, 20.515, 22.458};
-  static constexpr double k1e2[] = {6.635, 9.210, 11.345, 13.277, 15.086, 16.812};
-  const int i = std::clamp(dof, 1, 6) - 1;
-  return false_alarm <= 1e-3 ? k1e3[i] : k1e2[i];
-}
-
 bool sameShell(const Sample& a, const Sample& b) {
   return a.shell == b.shell && a.ball_index == b.ball_index && a.chuck_index == b.chuck_index &&
          a.extension_mm == b.extension_mm;
@@ -64,6 +56,14 @@ Regression regress(const Eigen::MatrixXd& g, const Eigen::VectorXd& r, double si
 }
 
 }  // namespace
+
+// Upper quantiles of the chi-square distribution, at 1e-3 and 1e-2 (1 to 6 degrees of freedom).
+double chi2Quantile(int dof, double false_alarm) {
+  static constexpr double k1e3[] = {10.828, 13.816, 16.266, 18.467, 20.515, 22.458};
+  static constexpr double k1e2[] = {6.635, 9.210, 11.345, 13.277, 15.086, 16.812};
+  const int i = std::clamp(dof, 1, 6) - 1;
+  return false_alarm <= 1e-3 ? k1e3[i] : k1e2[i];
+}
 
 namespace {
 

@@ -2,6 +2,7 @@
 
 #include <robocal/kinematics/gravity.hpp>
 #include <robocal/kinematics/kinematics.hpp>
+#include <robocal/solver/adequacy.hpp>
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -39,11 +40,18 @@ std::string ComplianceEstimate::summary() const {
   char buf[160];
   for (int j : joints) {
     std::snprintf(buf, sizeof buf, "%sjoint %d %.3g +/- %.2g", out.empty() ? "" : ", ", j + 1,
-                  compliance.deg_per_nm[j], sigma_deg_per_nm[j]);
+                  fitted_deg_per_nm[j], sigma_deg_per_nm[j]);
     out += buf;
   }
   std::snprintf(buf, sizeof buf, " deg/(N m): up to %.3f +/- %.3f deg of twist at these poses",
                 largest_twist_deg, largest_twist_sigma_deg);
+  out += buf;
+  if (identified) return out;
+  std::snprintf(
+      buf, sizeof buf,
+      "; not told from noise (chi-square %.1f, needs %.1f): the model stays rigid. Shells "
+      "that vary the arm's reach and height would show it",
+      chi2, chi2_threshold);
   return out + buf;
 }
 
@@ -98,8 +106,17 @@ SolveResult solveWithCompliance(const Model& start, const std::vector<Sample>& s
     const Eigen::MatrixXd cov =
         fit.sigma_mm * fit.sigma_mm *
         (jac.transpose() * jac).ldlt().solve(Eigen::MatrixXd::Identity(k, k));
-    for (Eigen::Index c = 0; c < k; ++c)
+    Eigen::VectorXd change(k);
+    for (Eigen::Index c = 0; c < k; ++c) {
       out.sigma_deg_per_nm[out.joints[c]] = std::sqrt(std::max(0.0, cov(c, c)));
+      change[c] = twist[out.joints[c]] - start.compliance->deg_per_nm[out.joints[c]];
+    }
+    out.chi2 = change.dot(cov.ldlt().solve(change));
+    out.chi2_threshold = chi2Quantile(static_cast<int>(k), 1e-3);
+    // Kept when it stands out of its uncertainty and is a twist a model file holds (|c| <= 0.1).
+    out.identified =
+        out.chi2 > out.chi2_threshold &&
+        std::all_of(twist.begin(), twist.end(), [](double c) { return std::abs(c) <= 0.1; });
     // The largest twist over the samples and its sigma (the twist's gradient in c is the torque).
     for (const auto& t : tau) {
       double twist_deg = 0;
@@ -115,7 +132,11 @@ SolveResult solveWithCompliance(const Model& start, const std::vector<Sample>& s
     }
   }
   out.compliance = *start.compliance;
-  out.compliance.deg_per_nm = twist;
+  out.compliance.deg_per_nm = out.fitted_deg_per_nm = twist;
+  if (k > 0 && !out.identified) {  // not told from noise: the start's twist, and its fit
+    out.compliance.deg_per_nm = start.compliance->deg_per_nm;
+    fit = fitAt(start.compliance->deg_per_nm);
+  }
   fit.before = before;
   return fit;
 }

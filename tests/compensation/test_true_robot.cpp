@@ -146,7 +146,9 @@ TEST_CASE("truth file: realism round-trips, model readers ignore it, bad keys ar
 }
 
 TEST_CASE("a model with compliance twists its joints as the true robot's compliance does") {
-  const Model rigid = puma560NominalModel();
+  Model rigid = puma560NominalModel();
+  rigid.joints[1].gain = 1.002;  // the twist is an angle: divided by the gain in the readings
+  rigid.joints[2].gain = 0.997;
   TrueRobot truth{rigid, Realism::ideal()};
   truth.realism.compliance = Realism::puma560Typical().compliance;
   Model compliant = rigid;

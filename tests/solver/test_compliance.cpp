@@ -72,6 +72,7 @@ TEST_CASE("compliance: the twist of the loaded joints is identified, and only wh
     const ComplianceEstimate& c = *compliant.compliance;
     INFO(c.summary());
     CHECK(c.joints == std::vector<int>{1, 2});
+    CHECK(c.identified);
     for (int j : c.joints) {
       const double true_value = twisting.compliance.deg_per_nm[j];
       CHECK(std::abs(c.compliance.deg_per_nm[j] - true_value) < 4 * c.sigma_deg_per_nm[j]);
@@ -87,12 +88,18 @@ TEST_CASE("compliance: the twist of the loaded joints is identified, and only wh
     INFO("whole range: rigid fit " << rigid_mm << " mm, with compliance " << compliant_mm << " mm");
     CHECK(compliant_mm < 0.7 * rigid_mm);
   }
-  SECTION("a rigid true robot: no compliance beyond its uncertainty") {
+  SECTION("a rigid true robot: no twist beyond its uncertainty, and the model stays rigid") {
     const TrueRobot truth{geometry, Realism::ideal()};
     const FitAssessment compliant = assessFit(nominal, measured(truth, noise_mm, 41), with);
     REQUIRE(compliant.compliance);
     const ComplianceEstimate& c = *compliant.compliance;
     INFO(c.summary());
-    for (int j : c.joints) CHECK(std::abs(c.compliance.deg_per_nm[j]) < 4 * c.sigma_deg_per_nm[j]);
+    CHECK(c.joints == std::vector<int>{1, 2});
+    for (int j : c.joints) CHECK(std::abs(c.fitted_deg_per_nm[j]) < 4 * c.sigma_deg_per_nm[j]);
+    // Not told from noise: the model stays rigid, and says so.
+    CHECK_FALSE(c.identified);
+    CHECK(c.compliance.deg_per_nm == std::array<double, kJointCount>{});
+    CHECK_FALSE(compliant.calibrated.compliance->twists());
+    CHECK_THAT(c.summary(), Catch::Contains("the model stays rigid"));
   }
 }

@@ -29,6 +29,10 @@
 
 namespace robocal {
 
+// The upper quantile of the chi-square distribution with `dof` degrees of freedom (1 to 6) at
+// `false_alarm` 1e-3 (or, above it, 1e-2).
+double chi2Quantile(int dof, double false_alarm);
+
 struct AdequacyPattern {
   std::string pattern;   // "approach direction", "gravity torque", "time"
   std::string detail;    // which joints, in words ("joints 2, 3")

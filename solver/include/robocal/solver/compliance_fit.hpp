@@ -9,7 +9,7 @@
 // Gauss-Newton step of those fits' residuals, whose Jacobian is taken by differences (one fit per
 // joint). The residual is nearly linear in c: two steps reach it. Its covariance is the fit's
 // sigma^2 (J^T J)^-1 with J that projected Jacobian: what the data say about c once the 54
-// parameters have taken what they can. Math only.
+// parameters have taken what they can; the twist is kept only when it stands out of it. Math only.
 #pragma once
 
 #include <robocal/solver/calibrate.hpp>
@@ -21,16 +21,25 @@
 namespace robocal {
 
 struct ComplianceEstimate {
-  JointCompliance compliance;  // the start's load, with the identified twist per N m
+  // The start's load with the twist per N m the model takes: the fitted one when identified,
+  // else the start's.
+  JointCompliance compliance;
+  std::array<double, kJointCount> fitted_deg_per_nm{};  // what the data show, kept or not
   // 1-sigma of each joint's twist per N m (deg/(N m)); 0 for the joints not identified.
   std::array<double, kJointCount> sigma_deg_per_nm{};
-  std::vector<int> joints;  // identified (0-based), those carrying the weight
+  std::vector<int> joints;  // fitted (0-based), those carrying the weight
+  // Whether the twist the data show stands out of its uncertainty: its chi-square (the change from
+  // the start's twist, weighed by its covariance) above the quantile at 1e-3 for its joints. When
+  // it does not, the model keeps the start's twist (a rigid arm stays rigid): a twist the data
+  // cannot tell from noise would only move the arm's whole range by that noise.
+  bool identified = false;
+  double chi2 = 0, chi2_threshold = 0;
   // The largest twist over the samples' poses (deg) and its 1-sigma: what the compliance means.
   double largest_twist_deg = 0;
   double largest_twist_sigma_deg = 0;
   int fits = 0;  // solveCalibration calls
   // In words: "joint 2 0.00071 +/- 0.00004, joint 3 0.0015 +/- 0.0001 deg/(N m): up to 0.031
-  // +/- 0.002 deg of twist at these poses".
+  // +/- 0.002 deg of twist at these poses", or why it was not kept.
   std::string summary() const;
 };
 
