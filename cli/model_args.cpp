@@ -1,5 +1,6 @@
 #include "model_args.hpp"
 
+#include <robocal/formats/csv.hpp>
 #include <robocal/formats/model_json.hpp>
 #include <robocal/kinematics/puma560.hpp>
 
@@ -65,14 +66,15 @@ void applyPayloadArgs(const Args& args, Model& model) {
   }
   if (args.has("payload-com")) {
     const std::string text = args.get("payload-com", "");
-    double x = 0, y = 0, z = 0;
-    char rest = 0;
-    if (std::sscanf(text.c_str(), "%lf,%lf,%lf%c", &x, &y, &z, &rest) != 3 || !std::isfinite(x) ||
-        !std::isfinite(y) || !std::isfinite(z) || std::abs(x) > 1e4 || std::abs(y) > 1e4 ||
-        std::abs(z) > 1e4)
-      throw UsageError("--payload-com: expected x,y,z in mm (the last link's frame), got \"" +
-                       text + "\"");
-    load.payload_com_mm = Eigen::Vector3d(x, y, z);
+    const UsageError bad("--payload-com: expected x,y,z in mm (the last link's frame), got \"" +
+                         text + "\"");
+    const auto fields = csv::splitFields(text);
+    if (fields.size() != 3) throw bad;
+    for (int i = 0; i < 3; ++i) {
+      const auto v = csv::number(fields[i]);
+      if (!v || std::abs(*v) > 1e4) throw bad;
+      load.payload_com_mm[i] = *v;
+    }
   }
 }
 

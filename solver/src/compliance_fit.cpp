@@ -57,7 +57,10 @@ std::string ComplianceEstimate::summary() const {
 
 std::vector<int> loadedJoints(const Model& start, const std::vector<Sample>& samples) {
   if (!start.compliance) return {};
-  const auto rms = rmsTorques(torques(start, samples));
+  return loadedJoints(rmsTorques(torques(start, samples)));
+}
+
+std::vector<int> loadedJoints(const std::array<double, kJointCount>& rms) {
   const double largest = *std::max_element(rms.begin(), rms.end());
   std::vector<int> joints;
   for (int j = 0; j < kJointCount; ++j)
@@ -72,9 +75,9 @@ SolveResult solveWithCompliance(const Model& start, const std::vector<Sample>& s
         "the model has no compliance load (link masses, the fixture): add a \"compliance\" object "
         "(docs/model-format.md)");
   out = {};
-  out.joints = loadedJoints(start, samples);
   const auto tau = torques(start, samples);
   const auto rms = rmsTorques(tau);
+  out.joints = loadedJoints(rms);
   Model model = start;
   const auto fitAt = [&](const std::array<double, kJointCount>& twist) {
     model.compliance->deg_per_nm = twist;
@@ -85,7 +88,7 @@ SolveResult solveWithCompliance(const Model& start, const std::vector<Sample>& s
   const Eigen::Index m = static_cast<Eigen::Index>(samples.size());
   const Eigen::Index k = static_cast<Eigen::Index>(out.joints.size());
   SolveResult fit = fitAt(twist);
-  const ResidualStats before = fit.before;  // the start's, with the start's twist
+  const SolveResult at_start = fit;  // kept when the twist is not told from noise
   Eigen::MatrixXd jac(m, k);
   if (k > 0) {
     // The Jacobian of the fitted residuals by differences, each step a 1e-3 deg RMS twist.
@@ -135,9 +138,9 @@ SolveResult solveWithCompliance(const Model& start, const std::vector<Sample>& s
   out.compliance.deg_per_nm = out.fitted_deg_per_nm = twist;
   if (k > 0 && !out.identified) {  // not told from noise: the start's twist, and its fit
     out.compliance.deg_per_nm = start.compliance->deg_per_nm;
-    fit = fitAt(start.compliance->deg_per_nm);
+    return at_start;
   }
-  fit.before = before;
+  fit.before = at_start.before;  // the start's, with the start's twist
   return fit;
 }
 

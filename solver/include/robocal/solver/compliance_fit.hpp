@@ -47,6 +47,8 @@ struct ComplianceEstimate {
 // has an RMS of at least a tenth of the largest joint's (joints 2 and 3 of a PUMA), from the
 // start model's load.
 std::vector<int> loadedJoints(const Model& start, const std::vector<Sample>& samples);
+// The same from each joint's RMS torque (N m).
+std::vector<int> loadedJoints(const std::array<double, kJointCount>& rms_torque_nm);
 
 // Fits the 54 parameters and the loaded joints' compliance from `start`, whose compliance gives
 // the load (and the starting twist): the fit of the 54 at the identified compliance, which
