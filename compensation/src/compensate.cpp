@@ -88,7 +88,11 @@ double Compensator::predictedPositionError(const JointsDeg& q) const {
   calibrated_.kinematics().ballPositionJacobian(q, options_.tool.translation(), full);
   Eigen::MatrixXd j(3, estimated_.size());
   for (size_t k = 0; k < estimated_.size(); ++k) j.col(k) = full.col(estimated_[k]);
-  return std::sqrt(std::max(0.0, (j * covariance_ * j.transpose()).trace()));
+  // The error the fit found the model does not contain (ModelProvenance::unmodelled_mm), seen by
+  // the bar along one direction: sqrt(3) times it in 3D, in quadrature with the parameters' part.
+  const double unmodelled_mm = calibrated().provenance ? calibrated().provenance->unmodelled_mm : 0;
+  return std::sqrt(std::max(0.0, (j * covariance_ * j.transpose()).trace()) +
+                   3 * unmodelled_mm * unmodelled_mm);
 }
 
 double Compensator::predictedOrientationError(const JointsDeg& q) const {

@@ -129,6 +129,9 @@ ModelProvenance provenanceFromJson(const Reader& r, const json& value) {
   p.approach_deg = r.optionalNumber(value, where, "approach_deg");
   if (!(p.approach_deg >= 0 && p.approach_deg <= 1))
     r.fail(where + ".approach_deg", "expected 0 to 1 (deg)");
+  p.unmodelled_mm = r.optionalNumber(value, where, "unmodelled_mm");
+  if (!(p.unmodelled_mm >= 0 && p.unmodelled_mm <= 100))
+    r.fail(where + ".unmodelled_mm", "expected 0 to 100 (mm)");
   return p;
 }
 
@@ -157,6 +160,7 @@ nlohmann::ordered_json provenanceToJson(const ModelProvenance& p) {
     out["measured_joints_deg"] = ranges;
   }
   if (p.approach_deg > 0) out["approach_deg"] = p.approach_deg;
+  if (p.unmodelled_mm > 0) out["unmodelled_mm"] = p.unmodelled_mm;
   return out;
 }
 

@@ -289,6 +289,7 @@ Model calibratedModel(const FitAssessment& fit, const FitOrigin& origin,
   }
   p.samples_files = origin.samples_files;
   p.approach_deg = origin.approach_deg;
+  p.unmodelled_mm = fit.adequacy.unmodelled_bar_mm();
   p.samples = fit.samples.size();
   p.rms_mm = fit.fit.after.rms_mm;
   p.rank = fit.fit.identifiability.rank;
@@ -349,7 +350,7 @@ nlohmann::ordered_json fitSummaryJson(const FitAssessment& a) {
        ad.fit_over_noise_limit > 0 ? ojson(ad.fit_over_noise_limit) : ojson(nullptr)},
       {"lack_of_fit", ad.lack_of_fit},
       {"sigma_mm", a.adequacy.sigma_mm},
-      {"lack_of_fit_mm", a.adequacy.unmodelled_mm},
+      {"lack_of_fit_mm", a.adequacy.unmodelled_bar_mm()},
       {"summary", a.adequacy.summary()},
       {"patterns", patterns}};
   if (a.compliance) {

@@ -138,6 +138,13 @@ std::string Adequacy::summary() const {
   return out;
 }
 
+double Adequacy::unmodelled_bar_mm() const {
+  double mm = unmodelled_mm;
+  if (lack_of_fit && noise_mm)
+    mm = std::max(mm, std::sqrt(std::max(0.0, sigma_mm * sigma_mm - *noise_mm * *noise_mm)));
+  return mm;
+}
+
 Adequacy testAdequacy(const Model& calibrated, const std::vector<Sample>& samples,
                       const Eigen::VectorXd& residuals, double sigma_mm, double false_alarm) {
   Adequacy a;

@@ -375,6 +375,26 @@ TEST_CASE("a calibrated model's covariance survives its file, and a bad one is r
   CHECK_THROWS_WITH(parseModel(json.dump(), "m.json"), Contains("not symmetric"));
 }
 
+TEST_CASE("error the fit found the model does not contain widens every predicted position error") {
+  const Model nominal = puma560NominalModel();
+  const Model fitted = calibrate(nominal, perturbed(9), 9);
+  Model m = fitted;
+  if (!m.provenance) m.provenance = ModelProvenance{};
+  m.provenance->unmodelled_mm = 0.03;  // along the bar: sqrt(3) times it in 3D
+  const Model back = parseModel(formatModel(m), "m.json");
+  REQUIRE(back.provenance);
+  CHECK(back.provenance->unmodelled_mm == 0.03);
+  for (const JointsDeg& q : programJoints(5, 3)) {
+    const double rigid = Compensator(nominal, fitted).predictedPositionError(q);
+    const double widened = Compensator(nominal, back).predictedPositionError(q);
+    CHECK(widened * widened == Approx(rigid * rigid + 3 * 0.03 * 0.03).epsilon(1e-9));
+  }
+  auto json = modelToJson(m);
+  json["provenance"]["unmodelled_mm"] = -0.1;
+  CHECK_THROWS_WITH(parseModel(json.dump(), "m.json"),
+                    Contains("provenance.unmodelled_mm: expected 0 to 100 (mm)"));
+}
+
 TEST_CASE("error statistics: RMS, nearest-rank p95 and max") {
   std::vector<double> v;
   for (int i = 1; i <= 100; ++i) v.push_back(i);

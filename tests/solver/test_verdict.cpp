@@ -119,7 +119,9 @@ TEST_CASE("adequacy: backlash shows as a pattern of the approach, an ideal robot
       if (with_backlash && !a.adequacy.ok) {
         CHECK_THAT(a.adequacy.summary(), Catch::Contains("approach direction of joint"));
         CHECK(a.adequacy.unmodelled_mm > 0.01);
+        CHECK(a.adequacy.unmodelled_bar_mm() == a.adequacy.unmodelled_mm);
       }
+      if (a.adequacy.ok) CHECK(a.adequacy.unmodelled_bar_mm() == 0);
     }
   }
   CHECK(fired_backlash == seeds);
@@ -164,5 +166,10 @@ TEST_CASE(
   CHECK(worse.adequacy.lack_of_fit);
   CHECK_FALSE(worse.adequacy.ok);
   CHECK(worse.adequacy.fit_over_noise > worse.adequacy.fit_over_noise_limit);
+  // What the model does not contain, from the residual's excess over the noise: about the 0.08
+  // mm added (less what the parameters absorbed of it).
+  CHECK(worse.adequacy.unmodelled_bar_mm() > 0.05);
+  CHECK(worse.adequacy.unmodelled_bar_mm() < 0.1);
+  CHECK(plain.adequacy.unmodelled_bar_mm() == 0);
   CHECK_THAT(worse.adequacy.summary(), Catch::Contains("x the bar's noise measured by 90"));
 }

@@ -124,7 +124,9 @@ class Compensator {
   Eigen::Isometry3d calibratedToolPose(const JointsDeg& readings_deg) const;
 
   // The calibrated model's 1-sigma tool position error (mm) and orientation error (deg) at these
-  // readings, from its covariance; NaN when it has none.
+  // readings, from its covariance; NaN when it has none. The position error includes the error
+  // the fit found the model does not contain (ModelProvenance::unmodelled_mm), the orientation
+  // error does not (a bar measures no orientation).
   double predictedPositionError(const JointsDeg& readings_deg) const;
   double predictedOrientationError(const JointsDeg& readings_deg) const;
 

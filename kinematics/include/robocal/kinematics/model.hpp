@@ -102,6 +102,11 @@ struct ModelProvenance {
   // motion.approach_deg), so the joint offsets hold the backlash of that side: compensate writes
   // its targets the same way. 0: the points were reached from either side (older files too).
   double approach_deg = 0;
+  // The error the fit found that the model does not contain, RMS along the bar, in mm (the
+  // adequacy test: Adequacy::unmodelled_bar_mm). A bar sees one direction of a position error:
+  // the predicted position errors add sqrt(3) times it in quadrature, so a model with error it
+  // cannot explain does not promise the accuracy of one without. 0: none found (older files too).
+  double unmodelled_mm = 0;
 };
 
 struct Model {

@@ -58,6 +58,11 @@ struct Adequacy {
   // rate (judged from 10 degrees of freedom), and whether the fit exceeds it.
   double fit_over_noise = 0, fit_over_noise_limit = 0;
   bool lack_of_fit = false;
+  // The error the model does not contain, RMS along the bar: the found patterns' part, or the
+  // residual in excess of the measured noise, sqrt(sigma^2 - noise^2), when there is a lack of
+  // fit and that is larger; 0 for an adequate fit. The calibrated model carries it
+  // (ModelProvenance::unmodelled_mm) and its predicted position errors include it.
+  double unmodelled_bar_mm() const;
   // One sentence for people: "0.042 mm of error the model does not contain; it follows the
   // approach direction of joints 2, 3", or "no pattern in the residual ...".
   std::string summary() const;
