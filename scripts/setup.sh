@@ -3,7 +3,7 @@
 set -euo pipefail
 packages=(build-essential cmake pkg-config libeigen3-dev libboost-dev libboost-system-dev
           libserialport-dev libspdlog-dev nlohmann-json3-dev catch2 libsystemd-dev systemd
-          liburdfdom-dev clang libclang-rt-14-dev clang-format jq ccache
+          liburdfdom-dev liburdfdom-tools python3-pykdl clang libclang-rt-14-dev clang-format jq ccache
           chromium chromium-driver fonts-dejavu-core python3-selenium python3-prometheus-client)
 missing=()
 for p in "${packages[@]}"; do
