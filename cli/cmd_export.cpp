@@ -14,6 +14,7 @@ namespace {
 
 constexpr const char* kHelp =
     R"(usage: robocal export --urdf --model MODEL --out FILE [--name ROBOT]
+                      [--velocity-deg-per-s V] [--effort-nm E]
 
 Writes the model as a URDF file for tools that read URDF (ROS, visualizers, planners): six
 revolute joints about their z axes, from the link chuck_fixture (the model's global frame, the
@@ -25,13 +26,29 @@ the file and printed here. With gains of 1 the joint value is the reading. The e
 `robocal compensate` with the model file (docs/compensation.md). docs/export.md has the frames
 and how the export is tested.
 
+URDF requires each joint's rated velocity and effort, and a velocity of 0 is a joint a planner
+cannot move: they come from the model's joints (velocity_deg_per_s, effort_nm), and for joints
+the model has none of, from --velocity-deg-per-s and --effort-nm (take them from the robot's
+data sheet); without either the export is refused, naming the joints.
+
   --urdf                  write URDF (the only format so far)                     required
   --model FILE            model to export (model format)                          required
   --out FILE              URDF file to write (replaced whole, never half-written) required
   --name ROBOT            the robot's name in the URDF       [from the model's name]
+  --velocity-deg-per-s V  rated joint speed for joints the model has none of  [the model's]
+  --effort-nm E           rated joint torque for joints the model has none of [the model's]
 
 exit status: 0 written, 1 an unreadable model or an unwritable file, 2 a usage error
 )";
+
+// A positive number option, 0 when absent.
+double positiveArg(const Args& args, const char* key) {
+  const double v = args.number(key, 0);
+  if (args.has(key) && !(v > 0))
+    throw UsageError(std::string("--") + key + " expects a positive number, not '" +
+                     args.get(key, "") + "'");
+  return v;
+}
 
 // A gain as the file's comment states it: the fewest digits that read back as the same double.
 std::string shortest(double value) {
@@ -40,7 +57,8 @@ std::string shortest(double value) {
 }
 
 int run(const std::vector<std::string>& argv) {
-  const Args args(argv, {"model", "out", "name"}, {"urdf", "help"});
+  const Args args(argv, {"model", "out", "name", "velocity-deg-per-s", "effort-nm"},
+                  {"urdf", "help"});
   if (args.flag("help")) {
     std::fputs(kHelp, stdout);
     return 0;
@@ -60,6 +78,19 @@ int run(const std::vector<std::string>& argv) {
   UrdfOptions options;
   options.robot_name = args.get("name", urdfRobotName(model));
   options.source = std::filesystem::absolute(model_path).lexically_normal().string();
+  options.velocity_deg_per_s = positiveArg(args, "velocity-deg-per-s");
+  options.effort_nm = positiveArg(args, "effort-nm");
+  std::vector<std::string> missing;
+  urdfLimits(model, options, &missing);
+  if (!missing.empty()) {
+    std::string list;
+    for (const std::string& m : missing) list += (list.empty() ? "" : ", ") + m;
+    throw UsageError(
+        "URDF needs each joint's rated velocity and effort, and " + model_path +
+        " has none for: " + list +
+        ". Give them with --velocity-deg-per-s and --effort-nm (from the robot's data sheet), "
+        "or add velocity_deg_per_s and effort_nm to the model's joints");
+  }
   writeTextFileAtomic(out, modelToUrdf(model, options));
 
   const auto joints = urdfJointNames(model);

@@ -317,6 +317,12 @@ Model modelFromJson(const json& root, const std::string& source) {
     joint.max_deg = r.number(jo, where, "max");
     if (joint.gain == 0.0) r.fail(where + ".gain", "must not be zero");
     if (joint.min_deg >= joint.max_deg) r.fail(where, "min must be less than max");
+    joint.velocity_deg_per_s = r.optionalNumber(jo, where, "velocity_deg_per_s");
+    joint.effort_nm = r.optionalNumber(jo, where, "effort_nm");
+    if (!(joint.velocity_deg_per_s >= 0 && joint.velocity_deg_per_s <= 1e5))
+      r.fail(where + ".velocity_deg_per_s", "expected 0 (not known) to 100000 (deg/s)");
+    if (!(joint.effort_nm >= 0 && joint.effort_nm <= 1e6))
+      r.fail(where + ".effort_nm", "expected 0 (not known) to 1000000 (N m)");
   }
 
   const json& balls = r.array(root, "balls", kBallCount);
@@ -363,12 +369,16 @@ nlohmann::ordered_json modelToJson(const Model& m) {
                           {"rx", l.rx_deg}});
   out["links"] = links;
   ojson joints = ojson::array();
-  for (const JointParams& j : m.joints)
-    joints.push_back(ojson{{"name", j.name},
-                           {"offset", j.offset_deg},
-                           {"gain", j.gain},
-                           {"min", j.min_deg},
-                           {"max", j.max_deg}});
+  for (const JointParams& j : m.joints) {
+    ojson joint{{"name", j.name},
+                {"offset", j.offset_deg},
+                {"gain", j.gain},
+                {"min", j.min_deg},
+                {"max", j.max_deg}};
+    if (j.velocity_deg_per_s > 0) joint["velocity_deg_per_s"] = j.velocity_deg_per_s;
+    if (j.effort_nm > 0) joint["effort_nm"] = j.effort_nm;
+    joints.push_back(joint);
+  }
   out["joints"] = joints;
   ojson balls = ojson::array(), chucks = ojson::array();
   for (const auto& b : m.balls_mm) balls.push_back(ojson::array({b.x(), b.y(), b.z()}));

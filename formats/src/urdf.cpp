@@ -152,14 +152,21 @@ std::string headerComment(const Model& model, const UrdfOptions& options,
       "  (T = L0 * J1 * L1 * ... * J6 * L6, Jk = Rz(offset k + gain k * reading k)).\n"
       "  Units: meters and radians (the model file's mm and degrees converted); rpy is fixed-axis\n"
       "  roll, pitch, yaw: R = Rz(yaw) * Ry(pitch) * Rx(roll).\n"
-      "  Limits: the controller's reading limits (the model's min and max) in radians. Effort and\n"
-      "  velocity are not known to robocal and are written as 0: take them from the robot's data.\n"
+      "  Limits: the controller's reading limits (the model's min and max) in radians. Velocity\n"
+      "  (rad/s) and effort (N m): the model's joints' velocity_deg_per_s and effort_nm, or where\n"
+      "  the model has none the values the export was given (below).\n"
       "\n"
       "  Joint gains (URDF cannot hold a gain): each joint's URDF value must be\n"
       "  gain * reading, the controller's reading in radians times the gain below.\n";
   for (int j = 0; j < kJointCount; ++j)
     out += "    " + commentText(joints[j]) + " gain " + number(model.joints[j].gain) +
            (model.joints[j].gain == 1.0 ? "" : "   (not 1)") + "\n";
+  bool given_used = false;
+  for (const JointParams& j : model.joints)
+    given_used = given_used || !(j.velocity_deg_per_s > 0) || !(j.effort_nm > 0);
+  if (given_used)
+    out += "  Velocity and effort given to the export, for the joints the model has none of: " +
+           number(options.velocity_deg_per_s) + " deg/s, " + number(options.effort_nm) + " N m.\n";
   if (model.compliance && model.compliance->twists())
     out +=
         "  Gravity compliance (URDF cannot hold it): the model's joints twist under gravity by\n"
@@ -209,8 +216,32 @@ std::array<std::string, kJointCount> urdfJointNames(const Model& model) {
   return names;
 }
 
+std::array<UrdfJointLimits, kJointCount> urdfLimits(const Model& model, const UrdfOptions& options,
+                                                    std::vector<std::string>* missing) {
+  const auto names = urdfJointNames(model);
+  std::array<UrdfJointLimits, kJointCount> out;
+  for (int j = 0; j < kJointCount; ++j) {
+    const JointParams& joint = model.joints[j];
+    out[j].velocity_deg_per_s =
+        joint.velocity_deg_per_s > 0 ? joint.velocity_deg_per_s : options.velocity_deg_per_s;
+    out[j].effort_nm = joint.effort_nm > 0 ? joint.effort_nm : options.effort_nm;
+    if (missing && !(out[j].velocity_deg_per_s > 0)) missing->push_back(names[j] + " velocity");
+    if (missing && !(out[j].effort_nm > 0)) missing->push_back(names[j] + " effort");
+  }
+  return out;
+}
+
 std::string modelToUrdf(const Model& model, const UrdfOptions& options) {
   checkFinite(model);
+  std::vector<std::string> missing;
+  const auto limits = urdfLimits(model, options, &missing);
+  if (!missing.empty()) {
+    std::string list;
+    for (const std::string& m : missing) list += (list.empty() ? "" : ", ") + m;
+    throw std::invalid_argument(
+        "URDF needs each joint's velocity and effort, and the model has none for: " + list +
+        " (joints[].velocity_deg_per_s and effort_nm in the model file, or given to the export)");
+  }
   const std::array<std::string, kJointCount> joints = urdfJointNames(model);
   const std::string robot = options.robot_name.empty() ? urdfRobotName(model) : options.robot_name;
 
@@ -234,7 +265,8 @@ std::string modelToUrdf(const Model& model, const UrdfOptions& options) {
     out += "    " + origin(place) + "\n";
     out += "    <axis xyz=\"0 0 1\"/>\n";
     out += "    <limit lower=\"" + number(degToRad(joint.min_deg)) + "\" upper=\"" +
-           number(degToRad(joint.max_deg)) + "\" effort=\"0\" velocity=\"0\"/>\n";
+           number(degToRad(joint.max_deg)) + "\" effort=\"" + number(limits[j].effort_nm) +
+           "\" velocity=\"" + number(degToRad(limits[j].velocity_deg_per_s)) + "\"/>\n";
     out += "  </joint>\n";
   }
   out += fixedJoint(kBallFixtureJoint, bodyLink(kJointCount), kUrdfBallFixtureLink,

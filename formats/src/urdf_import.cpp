@@ -171,6 +171,10 @@ UrdfImport urdfToModel(const std::string& urdf_text, const std::string& source,
       if (!(joint.min_deg < joint.max_deg))
         fail("joint '" + j->name + "': its lower limit is not below its upper");
     }
+    if (j->limits) {  // rated speed and torque, for an export to carry on (0: not given)
+      joint.velocity_deg_per_s = std::max(0.0, j->limits->velocity) * kDegPerRad;
+      joint.effort_nm = std::max(0.0, j->limits->effort);
+    }
     pending = align.inverse();
     link_name = j->child_link_name;
     ++k;

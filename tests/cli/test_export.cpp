@@ -11,15 +11,23 @@ using namespace robocal;
 using namespace robocal::test;
 using Catch::Matchers::Contains;
 
+namespace {
+// The shipped PUMA states no rated speed or torque: the export is given them.
+const std::string kRated = " --velocity-deg-per-s 90 --effort-nm 100";
+}  // namespace
+
 TEST_CASE("robocal export --urdf writes the writer's URDF of the model and prints the gains") {
   TempDir dir;
-  const auto r = runRobocal("export --urdf --model " + kModel + " --out " + (dir / "puma.urdf"));
+  const auto r =
+      runRobocal("export --urdf --model " + kModel + " --out " + (dir / "puma.urdf") + kRated);
   INFO(r.output);
   REQUIRE(r.exit_code == 0);
   const Model model = loadModelFile(kModel);
   UrdfOptions options;
   options.robot_name = urdfRobotName(model);
   options.source = std::filesystem::path(kModel).lexically_normal().string();
+  options.velocity_deg_per_s = 90;
+  options.effort_nm = 100;
   CHECK(readTextFile(dir / "puma.urdf") == modelToUrdf(model, options));
   CHECK_FALSE(std::filesystem::exists(dir / "puma.urdf.tmp"));
   CHECK_THAT(r.output,
@@ -39,7 +47,7 @@ TEST_CASE("robocal export --urdf of a model with gains other than 1 says what th
   model.joints[2].gain = 1.000728;
   saveModelFile(dir / "cal.json", model);
   const auto r = runRobocal("export --urdf --model " + (dir / "cal.json") + " --out " +
-                            (dir / "cal.urdf") + " --name puma");
+                            (dir / "cal.urdf") + " --name puma" + kRated);
   INFO(r.output);
   REQUIRE(r.exit_code == 0);
   CHECK_THAT(r.output, Contains("robot \"puma\""));
@@ -65,7 +73,8 @@ TEST_CASE("robocal export: usage errors and unreadable or unwritable files are n
   r = runRobocal("export --urdf --model " + (dir / "missing.json") + " --out " + (dir / "x.urdf"));
   CHECK(r.exit_code == 1);
   CHECK_THAT(r.output, Contains(dir / "missing.json") && Contains("cannot open"));
-  r = runRobocal("export --urdf --model " + kModel + " --out " + (dir / "no/such/dir/x.urdf"));
+  r = runRobocal("export --urdf --model " + kModel + " --out " + (dir / "no/such/dir/x.urdf") +
+                 kRated);
   CHECK(r.exit_code == 1);
   CHECK_THAT(r.output, Contains(dir / "no/such/dir/x.urdf.tmp") && Contains("cannot create"));
   std::filesystem::copy_file(kModel, dir / "m.json");
@@ -73,5 +82,15 @@ TEST_CASE("robocal export: usage errors and unreadable or unwritable files are n
   CHECK(r.exit_code == 2);
   CHECK_THAT(r.output, Contains("is the model file itself"));
   CHECK(readTextFile(dir / "m.json") == readTextFile(kModel));
+  // No rated speed and torque in the model and none given: refused, naming the joints.
+  r = runRobocal("export --urdf --model " + kModel + " --out " + (dir / "x.urdf"));
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.output, Contains("URDF needs each joint's rated velocity and effort, and " + kModel +
+                                " has none for: J1 velocity, J1 effort"));
+  CHECK_THAT(r.output, Contains("Give them with --velocity-deg-per-s and --effort-nm"));
+  r = runRobocal("export --urdf --model " + kModel + " --out " + (dir / "x.urdf") +
+                 " --velocity-deg-per-s 0 --effort-nm 100");
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.output, Contains("--velocity-deg-per-s expects a positive number, not '0'"));
   CHECK_FALSE(std::filesystem::exists(dir / "x.urdf"));
 }

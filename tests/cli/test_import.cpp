@@ -46,9 +46,9 @@ TEST_CASE("robocal import --urdf writes a UR5 as a model, the cell's fixtures fr
 
 TEST_CASE("robocal import --urdf reads robocal's own export back, fixtures included") {
   TempDir dir;
-  REQUIRE(
-      runRobocal("export --urdf --model " + kModel + " --out " + (dir / "puma.urdf")).exit_code ==
-      0);
+  REQUIRE(runRobocal("export --urdf --model " + kModel + " --out " + (dir / "puma.urdf") +
+                     " --velocity-deg-per-s 90 --effort-nm 100")
+              .exit_code == 0);
   const auto r = runRobocal("import --urdf " + (dir / "puma.urdf") + " --out " + (dir / "m.json"));
   INFO(r.output);
   REQUIRE(r.exit_code == 0);

@@ -134,7 +134,7 @@ TEST_CASE("the URDF's joints are the model's: names, chain, axis and reading lim
 }
 
 TEST_CASE("the nominal PUMA's URDF reads as its numbers: meters, radians, short decimals") {
-  const std::string text = modelToUrdf(puma560NominalModel(), {"puma560", ""});
+  const std::string text = modelToUrdf(rated(puma560NominalModel()), {"puma560", ""});
   CHECK_THAT(text, Contains("<robot name=\"puma560\">"));
   // J1: L0 = Trans(-550, 0, 400) mm; J2: L1 = Rx(90 deg).
   CHECK_THAT(text, Contains("<origin xyz=\"-0.55 0 0.4\" rpy=\"0 0 0\"/>"));
@@ -143,9 +143,9 @@ TEST_CASE("the nominal PUMA's URDF reads as its numbers: meters, radians, short 
   CHECK_THAT(text, Contains("<origin xyz=\"0 0 0\" rpy=\"1.57079632679489"));
   CHECK_THAT(text, Contains("<origin xyz=\"0.4318 0 0\" rpy=\"0 0 0\"/>"));
   CHECK_THAT(text, Contains("<limit lower=\"-2.792526803190927\" upper=\"2.792526803190927\" "
-                            "effort=\"0\" velocity=\"0\"/>"));
+                            "effort=\"100\" velocity=\"1.5707963267948966\"/>"));
   std::mt19937_64 rng(2);
-  checkWorst(compare(puma560NominalModel(), text, rng, 50));
+  checkWorst(compare(rated(puma560NominalModel()), text, rng, 50));
 }
 
 TEST_CASE("origins at rpy's gimbal lock (pitch +-90 deg) export exactly") {
@@ -185,7 +185,7 @@ TEST_CASE("with gains other than 1 the URDF is exact when its joint values are r
 }
 
 TEST_CASE("the comment at the top states the gains, frames, units and where the model came from") {
-  Model m = puma560NominalModel();
+  Model m = rated(puma560NominalModel());
   m.joints[1].gain = 1.000728;
   m.joints[4].gain = 0.9993;
   m.name = "PUMA 560 calibrated 2026-12-02";
@@ -223,7 +223,7 @@ TEST_CASE("the comment at the top states the gains, frames, units and where the 
                           Contains("ball_fixture is the frame after the last") &&
                           Contains("L(k-1) * Rz(offset k)") && Contains("exact path"));
 
-  const std::string nominal = headerComment(modelToUrdf(puma560NominalModel()));
+  const std::string nominal = headerComment(modelToUrdf(rated(puma560NominalModel())));
   CHECK_THAT(nominal, Contains("Every gain is 1: the URDF joint value is the controller's "
                                "reading in radians."));
   CHECK_THAT(nominal, Contains("Provenance: none recorded"));
@@ -231,7 +231,7 @@ TEST_CASE("the comment at the top states the gains, frames, units and where the 
 }
 
 TEST_CASE("free text cannot break the URDF: names in the comment and the robot attribute") {
-  Model m = puma560NominalModel();
+  Model m = rated(puma560NominalModel());
   m.name = "bad -- name <&> \"quoted\"\nsecond line -";
   m.joints[0].name = "J1 --";
   const std::string text = modelToUrdf(m, {"robot \"<&>\"", "/tmp/a--b.json"});
@@ -244,7 +244,7 @@ TEST_CASE("free text cannot break the URDF: names in the comment and the robot a
 }
 
 TEST_CASE("joint names: the model's when they are usable, J1..J6 otherwise") {
-  Model m = puma560NominalModel();
+  Model m = rated(puma560NominalModel());
   const std::array<std::string, kJointCount> named = {"waist",      "shoulder",    "elbow",
                                                       "wrist_roll", "wrist_pitch", "flange"};
   for (int j = 0; j < kJointCount; ++j) m.joints[j].name = named[j];
@@ -253,7 +253,7 @@ TEST_CASE("joint names: the model's when they are usable, J1..J6 otherwise") {
   m.joints[3].name = m.joints[2].name;  // two joints with one name
   CHECK(urdfJointNames(m) ==
         std::array<std::string, kJointCount>{"J1", "J2", "J3", "J4", "J5", "J6"});
-  m = puma560NominalModel();
+  m = rated(puma560NominalModel());
   m.joints[0].name = "";
   CHECK(urdfJointNames(m)[0] == "J1");
   m.joints[0].name = "ball1_joint";  // a fixed joint's name
@@ -272,10 +272,33 @@ TEST_CASE("the robot name from the model's name") {
 }
 
 TEST_CASE("a model with a non-finite parameter is refused, naming the parameter") {
-  Model m = puma560NominalModel();
+  Model m = rated(puma560NominalModel());
   m.links[2].ry_deg = std::nan("");
   CHECK_THROWS_WITH(modelToUrdf(m), Contains("L2.ry is not a finite number"));
-  m = puma560NominalModel();
+  m = rated(puma560NominalModel());
   m.balls_mm[1].x() = INFINITY;
   CHECK_THROWS_WITH(modelToUrdf(m), Contains("balls[1] is not a finite point"));
+}
+
+TEST_CASE(
+    "URDF limits are never 0: the model's speed and torque, else the export's, else refused") {
+  Model m = puma560NominalModel();  // the shipped PUMA states no rated speed or torque
+  CHECK_THROWS_WITH(modelToUrdf(m),
+                    Contains("URDF needs each joint's velocity and effort, and the model has none "
+                             "for: J1 velocity, J1 effort, J2 velocity"));
+  m.joints[0].velocity_deg_per_s = 180.0;
+  m.joints[0].effort_nm = 120.0;
+  UrdfOptions options;
+  options.velocity_deg_per_s = 45.0;
+  options.effort_nm = 10.0;
+  const urdf::ModelInterfaceSharedPtr model = parse(modelToUrdf(m, options));
+  const auto j1 = model->getJoint("J1"), j2 = model->getJoint("J2");
+  REQUIRE((j1 && j1->limits && j2 && j2->limits));
+  CHECK(j1->limits->velocity == Approx(M_PI));  // the model's own
+  CHECK(j1->limits->effort == 120.0);
+  CHECK(j2->limits->velocity == Approx(M_PI / 4));  // the export's, for joints without
+  CHECK(j2->limits->effort == 10.0);
+  CHECK_THAT(modelToUrdf(m, options),
+             Contains("Velocity and effort given to the export, for the joints the model has "
+                      "none of: 45 deg/s, 10 N m."));
 }

@@ -61,6 +61,15 @@ inline std::map<std::string, Eigen::Isometry3d> linkPoses(
 
 // A model as a calibration leaves it: every link parameter and joint offset of the nominal PUMA
 // moved a little (gains are left at 1).
+// A model with every joint's rated speed and torque set (URDF requires them): 90 deg/s, 100 N m.
+inline Model rated(Model m) {
+  for (JointParams& j : m.joints) {
+    j.velocity_deg_per_s = 90.0;
+    j.effort_nm = 100.0;
+  }
+  return m;
+}
+
 inline Model calibratedLike(std::mt19937_64& rng) {
   const Model nominal = puma560NominalModel();
   const ParamVector sigma = paramSigmas(2.0, 0.3, 0.5, 0.0);
@@ -70,7 +79,7 @@ inline Model calibratedLike(std::mt19937_64& rng) {
   Model m = withParams(nominal, p);
   m.name = "PUMA 560 calibrated-like";
   for (JointParams& j : m.joints) j.gain = 1.0;
-  return m;
+  return rated(m);
 }
 
 inline JointsDeg randomReadings(const Model& m, std::mt19937_64& rng) {

@@ -15,8 +15,10 @@
 //   reading.
 // - Joint names: the model's joint names when they are six different, non-empty names that are
 //   not the fixed joints' (ball_fixture_joint, ball1_joint, ...); otherwise J1 .. J6.
-// - Limits: lower and upper are the model's reading limits (min, max) in radians; effort and
-//   velocity, which robocal does not know, are 0.
+// - Limits: lower and upper are the model's reading limits (min, max) in radians; velocity
+//   (rad/s) and effort (N m) the joint's velocity_deg_per_s and effort_nm, else the options'
+//   (urdfLimits). Never 0: a joint with neither is refused (URDF requires them, and a velocity
+//   of 0 is a joint MoveIt cannot move).
 // - Units: meters and radians; origins are xyz and fixed-axis rpy (R = Rz(yaw) Ry(pitch)
 //   Rx(roll)), every number printed with the fewest digits that read back as the same double.
 // - An XML comment before <robot> states the model's name, its source and provenance, the frames,
@@ -30,13 +32,25 @@
 
 #include <array>
 #include <string>
+#include <vector>
 
 namespace robocal {
 
 struct UrdfOptions {
   std::string robot_name;  // <robot name="...">; empty: urdfRobotName(model)
   std::string source;      // where the model was read from, stated in the comment; "" not stated
+  // For joints whose model has none (0): the rated speed and torque to write; 0: none given.
+  double velocity_deg_per_s = 0;
+  double effort_nm = 0;
 };
+
+// Each joint's velocity (deg/s) and effort (N m) as modelToUrdf writes them: the model's, else
+// the options'. The names of the joints left with a 0 go to `missing` ("J1 velocity").
+struct UrdfJointLimits {
+  double velocity_deg_per_s = 0, effort_nm = 0;
+};
+std::array<UrdfJointLimits, kJointCount> urdfLimits(const Model& model, const UrdfOptions& options,
+                                                    std::vector<std::string>* missing = nullptr);
 
 std::string modelToUrdf(const Model& model, const UrdfOptions& options = {});
 

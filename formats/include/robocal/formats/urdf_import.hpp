@@ -15,7 +15,9 @@
 //   A_k^-1. The forward kinematics are the URDF's to rounding at every joint value; the model's
 //   link frames are the URDF's turned by A_k (the same when the axes are z).
 // - Offsets 0, gains 1: the URDF joint value is the reading (radians in URDF, degrees in the
-//   model). Limits: a revolute joint's lower and upper; a continuous joint -360 to 360 deg.
+//   model). Limits: a revolute joint's lower and upper; a continuous joint -360 to 360 deg; its
+//   velocity and effort, when the URDF gives them, as the joint's velocity_deg_per_s and
+//   effort_nm.
 // - Units: meters and radians in, mm and degrees out.
 // - Balls and chucks: the links named ball1..ball3 fixed (through fixed joints only) below the
 //   tip, and chuck1..chuck3 fixed below the base, as `robocal export --urdf` writes them; when a

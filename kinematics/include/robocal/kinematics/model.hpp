@@ -40,6 +40,10 @@ struct JointParams {
   double gain = 1.0;
   double min_deg = -180;  // limits of the joint reading, not of theta
   double max_deg = 180;
+  // The joint's rated speed and torque, for other tools (URDF's velocity and effort); 0: not
+  // known. robocal's own motion does not use them (the cell's motion section sets its speed).
+  double velocity_deg_per_s = 0;
+  double effort_nm = 0;
 };
 
 // Gravity compliance (gravity.hpp has the torque): what gravity pulls on, the bodies moved by
