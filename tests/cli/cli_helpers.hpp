@@ -1,4 +1,5 @@
-// Runs the real robocal executable (as a user would) and captures its output.
+// Runs the real robocal executable (as a user would), or another program, and captures its
+// output; a temporary directory per test.
 #pragma once
 
 #include <sys/wait.h>
@@ -20,10 +21,8 @@ struct RunResult {
   std::string output;  // stdout and stderr
 };
 
-// `stderr_too`: the output has stderr after stdout's lines (false: stdout alone, e.g. a --json
-// object followed by the problems a failing command lists on stderr).
-inline RunResult runRobocal(const std::string& args, bool stderr_too = true) {
-  const std::string cmd = binDir() + "/robocal " + args + (stderr_too ? " 2>&1" : " 2>/dev/null");
+// Runs a shell command line and captures what it prints (as the command line redirects it).
+inline RunResult runCommand(const std::string& cmd) {
   RunResult r;
   FILE* pipe = ::popen(cmd.c_str(), "r");
   if (!pipe) return r;
@@ -33,6 +32,12 @@ inline RunResult runRobocal(const std::string& args, bool stderr_too = true) {
   const int status = ::pclose(pipe);
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
+}
+
+// `stderr_too`: the output has stderr after stdout's lines (false: stdout alone, e.g. a --json
+// object followed by the problems a failing command lists on stderr).
+inline RunResult runRobocal(const std::string& args, bool stderr_too = true) {
+  return runCommand(binDir() + "/robocal " + args + (stderr_too ? " 2>&1" : " 2>/dev/null"));
 }
 
 // A fresh temporary directory for one test, removed at the end.

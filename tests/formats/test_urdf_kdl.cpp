@@ -10,6 +10,7 @@
 #include <robocal/formats/urdf_import.hpp>
 #include <robocal/kinematics/units.hpp>
 
+#include "../cli/cli_helpers.hpp"
 #include "urdf_fk.hpp"
 
 #include <stdio.h>
@@ -28,31 +29,6 @@ namespace {
 constexpr double kKdlTolMm = 1e-3;
 constexpr double kKdlTolRad = 1e-9;
 
-struct Command {
-  int exit_code = -1;
-  std::string output;
-};
-
-Command runCommand(const std::string& command) {
-  Command r;
-  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
-  REQUIRE(pipe);
-  char buf[4096];
-  for (size_t n; (n = fread(buf, 1, sizeof buf, pipe)) > 0;) r.output.append(buf, n);
-  const int status = ::pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
-
-struct TempDir {
-  std::filesystem::path path;
-  TempDir() {
-    char tmpl[] = "/tmp/robocal-kdl-XXXXXX";
-    path = ::mkdtemp(tmpl);
-  }
-  ~TempDir() { std::filesystem::remove_all(path); }
-};
-
 // Debian's python, where python3-pykdl installs (a python3 earlier in PATH may be another one).
 std::string python() {
   return std::filesystem::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
@@ -64,7 +40,7 @@ std::vector<Eigen::Isometry3d> kdlPoses(const std::string& urdf_path, const std:
                                         const std::string& tip,
                                         const std::vector<std::vector<double>>& joints) {
   const TempDir dir;
-  const std::string csv = (dir.path / "joints.csv").string();
+  const std::string csv = dir / "joints.csv";
   {
     std::ofstream out(csv);
     out.precision(17);
@@ -73,8 +49,8 @@ std::vector<Eigen::Isometry3d> kdlPoses(const std::string& urdf_path, const std:
       out << "\n";
     }
   }
-  const Command r = runCommand(python() + " " ROBOCAL_SOURCE_DIR "/tests/formats/kdl_fk.py " +
-                               urdf_path + " " + base + " " + tip + " " + csv);
+  const RunResult r = runCommand(python() + " " ROBOCAL_SOURCE_DIR "/tests/formats/kdl_fk.py " +
+                                 urdf_path + " " + base + " " + tip + " " + csv + " 2>&1");
   INFO(r.output.substr(0, 2000));
   if (r.output.find("No module named 'PyKDL'") != std::string::npos)
     FAIL("Orocos KDL's Python module is missing: install python3-pykdl (scripts/setup.sh)");
@@ -95,7 +71,7 @@ std::vector<Eigen::Isometry3d> kdlPoses(const std::string& urdf_path, const std:
 }
 
 void checkUrdf(const std::string& path) {
-  const Command r = runCommand("check_urdf " + path);
+  const RunResult r = runCommand("check_urdf " + path + " 2>&1");
   INFO(r.output);
   if (r.exit_code == 127)
     FAIL("check_urdf is missing: install liburdfdom-tools (scripts/setup.sh)");
@@ -140,7 +116,7 @@ TEST_CASE("KDL reads robocal's URDF export as robocal computes it: 1,000 joint v
   for (int model = 0; model < 5; ++model) {
     Model m = calibratedLike(rng);
     m.joints[2].gain = 1.0007;  // the joint value KDL gets is reading * gain
-    const std::string path = (dir.path / ("m" + std::to_string(model) + ".urdf")).string();
+    const std::string path = dir / ("m" + std::to_string(model) + ".urdf");
     writeTextFileAtomic(path, modelToUrdf(m));
     if (model == 0) checkUrdf(path);
     const Worst w = compareWithKdl(m, path, kUrdfBaseLink, kUrdfBallFixtureLink, 200, rng);
