@@ -130,8 +130,8 @@ ModelProvenance provenanceFromJson(const Reader& r, const json& value) {
   if (!(p.approach_deg >= 0 && p.approach_deg <= 1))
     r.fail(where + ".approach_deg", "expected 0 to 1 (deg)");
   p.unmodelled_mm = r.optionalNumber(value, where, "unmodelled_mm");
-  if (!(p.unmodelled_mm >= 0 && p.unmodelled_mm <= 100))
-    r.fail(where + ".unmodelled_mm", "expected 0 to 100 (mm)");
+  if (!(p.unmodelled_mm >= 0))  // finite: number() refuses the rest
+    r.fail(where + ".unmodelled_mm", "expected 0 or more (mm)");
   return p;
 }
 
@@ -319,9 +319,9 @@ Model modelFromJson(const json& root, const std::string& source) {
     if (joint.min_deg >= joint.max_deg) r.fail(where, "min must be less than max");
     joint.velocity_deg_per_s = r.optionalNumber(jo, where, "velocity_deg_per_s");
     joint.effort_nm = r.optionalNumber(jo, where, "effort_nm");
-    if (!(joint.velocity_deg_per_s >= 0 && joint.velocity_deg_per_s <= 1e5))
+    if (!(joint.velocity_deg_per_s >= 0 && joint.velocity_deg_per_s <= kMaxVelocityDegPerS))
       r.fail(where + ".velocity_deg_per_s", "expected 0 (not known) to 100000 (deg/s)");
-    if (!(joint.effort_nm >= 0 && joint.effort_nm <= 1e6))
+    if (!(joint.effort_nm >= 0 && joint.effort_nm <= kMaxEffortNm))
       r.fail(where + ".effort_nm", "expected 0 (not known) to 1000000 (N m)");
   }
 

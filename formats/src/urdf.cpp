@@ -161,12 +161,17 @@ std::string headerComment(const Model& model, const UrdfOptions& options,
   for (int j = 0; j < kJointCount; ++j)
     out += "    " + commentText(joints[j]) + " gain " + number(model.joints[j].gain) +
            (model.joints[j].gain == 1.0 ? "" : "   (not 1)") + "\n";
-  bool given_used = false;
-  for (const JointParams& j : model.joints)
-    given_used = given_used || !(j.velocity_deg_per_s > 0) || !(j.effort_nm > 0);
-  if (given_used)
-    out += "  Velocity and effort given to the export, for the joints the model has none of: " +
-           number(options.velocity_deg_per_s) + " deg/s, " + number(options.effort_nm) + " N m.\n";
+  bool velocity_given = false, effort_given = false;
+  for (const JointParams& j : model.joints) {
+    velocity_given = velocity_given || !(j.velocity_deg_per_s > 0);
+    effort_given = effort_given || !(j.effort_nm > 0);
+  }
+  if (velocity_given)
+    out += "  Velocity given to the export, for the joints the model has none of: " +
+           number(options.velocity_deg_per_s) + " deg/s.\n";
+  if (effort_given)
+    out += "  Effort given to the export, for the joints the model has none of: " +
+           number(options.effort_nm) + " N m.\n";
   if (model.compliance && model.compliance->twists())
     out +=
         "  Gravity compliance (URDF cannot hold it): the model's joints twist under gravity by\n"

@@ -65,9 +65,9 @@ std::optional<Eigen::Isometry3d> fixedBelow(const urdf::ModelInterface& urdf,
                                             const std::string& from, const std::string& link) {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
   urdf::LinkConstSharedPtr at = urdf.getLink(link);
-  while (at && at->name != from) {
+  for (std::size_t steps = 0; at && at->name != from; ++steps) {
     const urdf::JointSharedPtr& j = at->parent_joint;
-    if (!j || j->type != urdf::Joint::FIXED) return std::nullopt;
+    if (!j || j->type != urdf::Joint::FIXED || steps > urdf.links_.size()) return std::nullopt;
     pose = toIsometryMm(j->parent_to_joint_origin_transform) * pose;
     at = urdf.getLink(j->parent_link_name);
   }
@@ -99,16 +99,24 @@ UrdfImport urdfToModel(const std::string& urdf_text, const std::string& source,
     // one (a prismatic joint counts here, to be refused by name below).
     urdf::LinkConstSharedPtr at = urdf->getLink(out.base_link);
     int seen = 0;
+    // A loop of links (which urdfdom does not refuse when the root is outside it) ends the search
+    // after as many steps as there are links.
+    const std::size_t most_steps = urdf->links_.size();
+    std::size_t steps = 0;
     while (seen < kJointCount) {
-      std::function<bool(const urdf::Link&)> leadsToMovable = [&](const urdf::Link& l) {
+      if (++steps > most_steps) fail("the links below '" + out.base_link + "' form a loop");
+      std::function<bool(const urdf::Link&, std::size_t)> leadsToMovable = [&](const urdf::Link& l,
+                                                                               std::size_t depth) {
+        if (depth > most_steps) fail("the links below '" + l.name + "' form a loop");
         for (const urdf::JointSharedPtr& j : l.child_joints)
-          if (j->type != urdf::Joint::FIXED || leadsToMovable(*urdf->getLink(j->child_link_name)))
+          if (j->type != urdf::Joint::FIXED ||
+              leadsToMovable(*urdf->getLink(j->child_link_name), depth + 1))
             return true;
         return false;
       };
       urdf::JointSharedPtr next;
       for (const urdf::JointSharedPtr& j : at->child_joints) {
-        if (j->type == urdf::Joint::FIXED && !leadsToMovable(*urdf->getLink(j->child_link_name)))
+        if (j->type == urdf::Joint::FIXED && !leadsToMovable(*urdf->getLink(j->child_link_name), 0))
           continue;
         if (next)
           fail("the chain branches at link '" + at->name + "' (joints '" + next->name + "' and '" +
@@ -128,7 +136,7 @@ UrdfImport urdfToModel(const std::string& urdf_text, const std::string& source,
   // The joints from the base down to the tip.
   std::vector<urdf::JointSharedPtr> chain;
   for (urdf::LinkConstSharedPtr at = urdf->getLink(out.tip_link); at->name != out.base_link;) {
-    if (!at->parent_joint)
+    if (!at->parent_joint || chain.size() > urdf->links_.size())
       fail("link '" + out.base_link + "' is not above link '" + out.tip_link + "'");
     chain.push_back(at->parent_joint);
     at = urdf->getLink(at->parent_joint->parent_link_name);
@@ -157,7 +165,17 @@ UrdfImport urdfToModel(const std::string& urdf_text, const std::string& source,
     if (!(axis.norm() > 0) || !axis.allFinite()) fail("joint '" + j->name + "' has no axis");
     Eigen::Isometry3d align = Eigen::Isometry3d::Identity();
     align.linear() = alignZ(axis.normalized());
-    pending = pending * toIsometryMm(j->parent_to_joint_origin_transform) * align;
+    const Eigen::Isometry3d before = pending * toIsometryMm(j->parent_to_joint_origin_transform);
+    // Any turn about the joint's own z keeps the kinematics (the next link starts with its
+    // inverse); the one that zeroes the link's ry keeps its ZYX angles away from ry = +-90 deg,
+    // where rz and rx turn about the same axis and a fit cannot tell them apart (a UR's shoulder,
+    // axes along y, came in at ry = 90 deg and left the fit one parameter short).
+    const Eigen::Matrix3d r = before.linear() * align.linear();
+    double phi = std::atan2(-r(2, 0), r(2, 1));
+    if (phi > M_PI / 2) phi -= M_PI;  // of the two turns that do it, the smaller
+    if (phi <= -M_PI / 2) phi += M_PI;
+    align.linear() = align.linear() * Eigen::AngleAxisd(phi, Eigen::Vector3d::UnitZ()).matrix();
+    pending = before * align;
     m.links[k] = linkFromTransform(pending, link_name);
     JointParams& joint = m.joints[k];
     joint.name = j->name;
@@ -168,12 +186,19 @@ UrdfImport urdfToModel(const std::string& urdf_text, const std::string& source,
       if (!j->limits) fail("revolute joint '" + j->name + "' has no <limit>");
       joint.min_deg = j->limits->lower * kDegPerRad;
       joint.max_deg = j->limits->upper * kDegPerRad;
-      if (!(joint.min_deg < joint.max_deg))
-        fail("joint '" + j->name + "': its lower limit is not below its upper");
+      if (!std::isfinite(joint.min_deg) || !std::isfinite(joint.max_deg) ||
+          !(joint.min_deg < joint.max_deg))
+        fail("joint '" + j->name + "': expected finite limits, the lower below the upper");
     }
     if (j->limits) {  // rated speed and torque, for an export to carry on (0: not given)
       joint.velocity_deg_per_s = std::max(0.0, j->limits->velocity) * kDegPerRad;
       joint.effort_nm = std::max(0.0, j->limits->effort);
+      // The model file's own bounds (model_json.cpp), so that what is written reads back.
+      if (!(joint.velocity_deg_per_s <= kMaxVelocityDegPerS))
+        fail("joint '" + j->name + "': velocity past " +
+             std::to_string(kMaxVelocityDegPerS / kDegPerRad) + " rad/s");
+      if (!(joint.effort_nm <= kMaxEffortNm))
+        fail("joint '" + j->name + "': effort past " + std::to_string(kMaxEffortNm) + " N m");
     }
     pending = align.inverse();
     link_name = j->child_link_name;

@@ -116,8 +116,9 @@ std::string Adequacy::summary() const {
     return out;
   }
   if (patterns_found) {
+    // The same figure as lack_of_fit_mm and the model's unmodelled_mm.
     std::snprintf(buf, sizeof buf, "%.3f mm of error the model does not contain; it follows ",
-                  unmodelled_mm);
+                  unmodelled_bar_mm());
     out = buf;
     bool first = true;
     for (const AdequacyPattern& p : patterns) {
@@ -130,10 +131,15 @@ std::string Adequacy::summary() const {
   if (lack_of_fit) {
     std::snprintf(buf, sizeof buf,
                   "%sthe fit's residual, %.3f mm, is %.2fx the bar's noise measured by %d "
-                  "revisits (%.3f mm)%s",
+                  "revisits (%.3f mm)",
                   out.empty() ? "" : "; ", sigma_mm, fit_over_noise, revisited_places,
-                  noise_mm.value_or(0), patterns_found ? "" : ": error the model does not contain");
+                  noise_mm.value_or(0));
     out += buf;
+    if (!patterns_found) {
+      std::snprintf(buf, sizeof buf, ": %.3f mm of error the model does not contain",
+                    unmodelled_bar_mm());
+      out += buf;
+    }
   }
   return out;
 }

@@ -392,7 +392,7 @@ TEST_CASE("error the fit found the model does not contain widens every predicted
   auto json = modelToJson(m);
   json["provenance"]["unmodelled_mm"] = -0.1;
   CHECK_THROWS_WITH(parseModel(json.dump(), "m.json"),
-                    Contains("provenance.unmodelled_mm: expected 0 to 100 (mm)"));
+                    Contains("provenance.unmodelled_mm: expected 0 or more (mm)"));
 }
 
 TEST_CASE("error statistics: RMS, nearest-rank p95 and max") {

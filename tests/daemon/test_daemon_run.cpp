@@ -303,8 +303,12 @@ TEST_CASE("faults mid-run stop the robot, pause the run and lose nothing", "[e2e
         REQUIRE_THAT(cell.sim->control(fault.command), Contains("ok"));
       }
       const std::size_t before = seen.size();
+      struct HookReset {  // the hook refers to `injected`: gone with it, also when a check throws
+        Cell& cell;
+        ~HookReset() { cell.mistake = nullptr; }
+      } hook_reset{cell};
       const std::string state = cell.operate(*c, {"paused", "done", "error", "aborted"}, 60, &seen);
-      cell.mistake = nullptr;
+      if (fault.at_connect_prompt) CHECK(injected);
       for (std::size_t i = seen.size() > before + 6 ? seen.size() - 6 : before; i < seen.size();
            ++i)
         UNSCOPED_INFO("seen: " << seen[i].dump());

@@ -39,6 +39,15 @@ TEST_CASE("a model survives the round trip through its file format exactly") {
   CHECK(back.name == m.name);
   CHECK(back.links[3].name == m.links[3].name);
   CHECK(back.chucks_mm[2] == m.chucks_mm[2]);
+  // A joint's rated speed and torque, when known; absent from the file when not.
+  m.joints[1].velocity_deg_per_s = 180.5;
+  m.joints[1].effort_nm = 150;
+  const std::string text = formatModel(m);
+  const Model rated = parseModel(text);
+  CHECK(rated.joints[1].velocity_deg_per_s == 180.5);
+  CHECK(rated.joints[1].effort_nm == 150);
+  CHECK(rated.joints[0].velocity_deg_per_s == 0);
+  CHECK(nlohmann::json::parse(text)["joints"][0].count("velocity_deg_per_s") == 0);
 }
 
 TEST_CASE("a calibrated model's provenance survives the round trip, older files have none") {
@@ -123,6 +132,10 @@ TEST_CASE("bad model files name the key and the problem") {
                     Contains("joints[2].gain: missing"));
   CHECK_THROWS_WITH(parseModel(edited([](auto& j) { j["joints"][0]["gain"] = 0; })),
                     Contains("joints[0].gain: must not be zero"));
+  CHECK_THROWS_WITH(parseModel(edited([](auto& j) { j["joints"][3]["velocity_deg_per_s"] = -1; })),
+                    Contains("joints[3].velocity_deg_per_s: expected 0 (not known) to 100000"));
+  CHECK_THROWS_WITH(parseModel(edited([](auto& j) { j["joints"][3]["effort_nm"] = 2e6; })),
+                    Contains("joints[3].effort_nm: expected 0 (not known) to 1000000 (N m)"));
   CHECK_THROWS_WITH(parseModel(edited([](auto& j) {
                       j["balls"][1] = {1, 2};
                     })),

@@ -299,6 +299,9 @@ TEST_CASE(
   CHECK(j2->limits->velocity == Approx(M_PI / 4));  // the export's, for joints without
   CHECK(j2->limits->effort == 10.0);
   CHECK_THAT(modelToUrdf(m, options),
-             Contains("Velocity and effort given to the export, for the joints the model has "
-                      "none of: 45 deg/s, 10 N m."));
+             Contains("Velocity given to the export, for the joints the model has none of: 45 "
+                      "deg/s.\n  Effort given to the export, for the joints the model has none "
+                      "of: 10 N m.\n"));
+  // A model rated on every joint states nothing given.
+  CHECK_THAT(modelToUrdf(rated(m), options), !Contains("given to the export"));
 }

@@ -67,6 +67,14 @@ TEST_CASE(
   CHECK(m.joints[5].name == "wrist_3_joint");
   CHECK(m.joints[2].min_deg == Approx(-180.0).epsilon(1e-8));
   CHECK(m.joints[5].max_deg == 360.0);  // continuous
+  // The rated speed and torque: 3.15 rad/s, 150 N m on the shoulder; none on the continuous
+  // wrist 3 (no <limit>).
+  CHECK(m.joints[1].velocity_deg_per_s == Approx(3.15 * 180 / M_PI));
+  CHECK(m.joints[1].effort_nm == 150.0);
+  CHECK(m.joints[5].velocity_deg_per_s == 0);
+  // Every link's ZYX angles away from ry = +-90 deg, where rz and rx turn about one axis (the
+  // UR's axes along y would put its shoulder link there).
+  for (int k = 0; k < kJointCount; ++k) CHECK(std::abs(m.links[k].ry_deg) < 1e-9);
   for (const JointParams& j : m.joints) {
     CHECK(j.offset_deg == 0);
     CHECK(j.gain == 1);
@@ -152,6 +160,11 @@ TEST_CASE("a URDF robocal cannot model is refused, naming the joint or link") {
   refused(kUr5, "no link named 'no_such_link' (--base)", options);
   refused(replaced(kUr5, R"(<axis xyz="0 0 1"/>)", R"(<axis xyz="0 0 1"/><mimic joint="x"/>)"),
           "mimics another");
+  refused(replaced(kUr5, R"(lower="-3.14159265" upper="3.14159265")",
+                   R"(lower="3.14159265" upper="-3.14159265")"),
+          "joint 'elbow_joint': expected finite limits, the lower below the upper");
+  refused(replaced(kUr5, R"(effort="150" velocity="3.15")", R"(effort="150" velocity="3150")"),
+          "joint 'shoulder_pan_joint': velocity past");
   CHECK_THROWS_WITH(urdfToModel("<robot", "broken.urdf"),
                     Contains("broken.urdf: not a URDF that urdfdom can read"));
 }

@@ -49,10 +49,14 @@ std::vector<Eigen::Isometry3d> kdlPoses(const std::string& urdf_path, const std:
       out << "\n";
     }
   }
-  const RunResult r = runCommand(python() + " " ROBOCAL_SOURCE_DIR "/tests/formats/kdl_fk.py " +
-                                 urdf_path + " " + base + " " + tip + " " + csv + " 2>&1");
-  INFO(r.output.substr(0, 2000));
-  if (r.output.find("No module named 'PyKDL'") != std::string::npos)
+  // stdout holds the poses alone; what the script says goes to its own file.
+  const std::string errors_path = dir / "stderr.txt";
+  const RunResult r =
+      runCommand(python() + " " ROBOCAL_SOURCE_DIR "/tests/formats/kdl_fk.py " + urdf_path + " " +
+                 base + " " + tip + " " + csv + " 2>" + errors_path);
+  const std::string errors = readTextFile(errors_path);
+  INFO(errors.substr(0, 2000));
+  if (errors.find("No module named 'PyKDL'") != std::string::npos)
     FAIL("Orocos KDL's Python module is missing: install python3-pykdl (scripts/setup.sh)");
   REQUIRE(r.exit_code == 0);
   std::vector<Eigen::Isometry3d> poses;

@@ -59,8 +59,6 @@ inline std::map<std::string, Eigen::Isometry3d> linkPoses(
   return poses;
 }
 
-// A model as a calibration leaves it: every link parameter and joint offset of the nominal PUMA
-// moved a little (gains are left at 1).
 // A model with every joint's rated speed and torque set (URDF requires them): 90 deg/s, 100 N m.
 inline Model rated(Model m) {
   for (JointParams& j : m.joints) {
@@ -69,6 +67,9 @@ inline Model rated(Model m) {
   }
   return m;
 }
+
+// A model as a calibration leaves it: every link parameter and joint offset of the nominal PUMA
+// moved a little (gains are left at 1), rated.
 
 inline Model calibratedLike(std::mt19937_64& rng) {
   const Model nominal = puma560NominalModel();

@@ -10,7 +10,9 @@
 // - The model is T = L0 Rz(q1) L1 ... Rz(q6) L6 (model.hpp). A URDF joint turns about its `axis`,
 //   any unit vector in its frame; robocal's joints turn about z. For each joint a rotation A_k
 //   that takes z onto the axis is chosen (none when the axis is z, a half turn about x when it is
-//   -z, otherwise the shortest rotation), and R(axis, q) = A_k Rz(q) A_k^-1: L(k-1) holds the
+//   -z, otherwise the shortest rotation, then turned about its own z so that the link it ends has
+//   ry = 0: away from the ZYX angles' gimbal lock, where a fit loses a parameter), and
+//   R(axis, q) = A_k Rz(q) A_k^-1: L(k-1) holds the
 //   fixed joints and the origin before joint k followed by A_k, and the next link starts with
 //   A_k^-1. The forward kinematics are the URDF's to rounding at every joint value; the model's
 //   link frames are the URDF's turned by A_k (the same when the axes are z).

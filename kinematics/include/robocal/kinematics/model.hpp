@@ -45,6 +45,9 @@ struct JointParams {
   double velocity_deg_per_s = 0;
   double effort_nm = 0;
 };
+// The largest rated speed and torque a model file holds (a bound against nonsense, not a robot's).
+inline constexpr double kMaxVelocityDegPerS = 1e5;
+inline constexpr double kMaxEffortNm = 1e6;
 
 // Gravity compliance (gravity.hpp has the torque): what gravity pulls on, the bodies moved by
 // joints 1..6 and the payload at the tool.
