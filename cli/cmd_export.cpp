@@ -80,14 +80,12 @@ int run(const std::vector<std::string>& argv) {
   options.source = std::filesystem::absolute(model_path).lexically_normal().string();
   options.velocity_deg_per_s = positiveArg(args, "velocity-deg-per-s");
   options.effort_nm = positiveArg(args, "effort-nm");
-  std::vector<std::string> missing;
+  std::string missing;
   urdfLimits(model, options, &missing);
   if (!missing.empty()) {
-    std::string list;
-    for (const std::string& m : missing) list += (list.empty() ? "" : ", ") + m;
     throw UsageError(
         "URDF needs each joint's rated velocity and effort, and " + model_path +
-        " has none for: " + list +
+        " has none for: " + missing +
         ". Give them with --velocity-deg-per-s and --effort-nm (from the robot's data sheet), "
         "or add velocity_deg_per_s and effort_nm to the model's joints");
   }

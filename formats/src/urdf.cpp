@@ -222,7 +222,7 @@ std::array<std::string, kJointCount> urdfJointNames(const Model& model) {
 }
 
 std::array<UrdfJointLimits, kJointCount> urdfLimits(const Model& model, const UrdfOptions& options,
-                                                    std::vector<std::string>* missing) {
+                                                    std::string* missing) {
   const auto names = urdfJointNames(model);
   std::array<UrdfJointLimits, kJointCount> out;
   for (int j = 0; j < kJointCount; ++j) {
@@ -230,21 +230,20 @@ std::array<UrdfJointLimits, kJointCount> urdfLimits(const Model& model, const Ur
     out[j].velocity_deg_per_s =
         joint.velocity_deg_per_s > 0 ? joint.velocity_deg_per_s : options.velocity_deg_per_s;
     out[j].effort_nm = joint.effort_nm > 0 ? joint.effort_nm : options.effort_nm;
-    if (missing && !(out[j].velocity_deg_per_s > 0)) missing->push_back(names[j] + " velocity");
-    if (missing && !(out[j].effort_nm > 0)) missing->push_back(names[j] + " effort");
+    for (const auto& [value, what] : {std::pair{out[j].velocity_deg_per_s, " velocity"},
+                                      std::pair{out[j].effort_nm, " effort"}})
+      if (missing && !(value > 0)) *missing += (missing->empty() ? "" : ", ") + names[j] + what;
   }
   return out;
 }
 
 std::string modelToUrdf(const Model& model, const UrdfOptions& options) {
   checkFinite(model);
-  std::vector<std::string> missing;
+  std::string missing;
   const auto limits = urdfLimits(model, options, &missing);
   if (!missing.empty()) {
-    std::string list;
-    for (const std::string& m : missing) list += (list.empty() ? "" : ", ") + m;
     throw std::invalid_argument(
-        "URDF needs each joint's velocity and effort, and the model has none for: " + list +
+        "URDF needs each joint's velocity and effort, and the model has none for: " + missing +
         " (joints[].velocity_deg_per_s and effort_nm in the model file, or given to the export)");
   }
   const std::array<std::string, kJointCount> joints = urdfJointNames(model);

@@ -102,18 +102,18 @@ UrdfImport urdfToModel(const std::string& urdf_text, const std::string& source,
     // A loop of links (which urdfdom does not refuse when the root is outside it) ends the search
     // after as many steps as there are links.
     const std::size_t most_steps = urdf->links_.size();
+    const std::function<bool(const urdf::Link&, std::size_t)> leadsToMovable =
+        [&](const urdf::Link& l, std::size_t depth) {
+          if (depth > most_steps) fail("the links below '" + l.name + "' form a loop");
+          for (const urdf::JointSharedPtr& j : l.child_joints)
+            if (j->type != urdf::Joint::FIXED ||
+                leadsToMovable(*urdf->getLink(j->child_link_name), depth + 1))
+              return true;
+          return false;
+        };
     std::size_t steps = 0;
     while (seen < kJointCount) {
       if (++steps > most_steps) fail("the links below '" + out.base_link + "' form a loop");
-      std::function<bool(const urdf::Link&, std::size_t)> leadsToMovable = [&](const urdf::Link& l,
-                                                                               std::size_t depth) {
-        if (depth > most_steps) fail("the links below '" + l.name + "' form a loop");
-        for (const urdf::JointSharedPtr& j : l.child_joints)
-          if (j->type != urdf::Joint::FIXED ||
-              leadsToMovable(*urdf->getLink(j->child_link_name), depth + 1))
-            return true;
-        return false;
-      };
       urdf::JointSharedPtr next;
       for (const urdf::JointSharedPtr& j : at->child_joints) {
         if (j->type == urdf::Joint::FIXED && !leadsToMovable(*urdf->getLink(j->child_link_name), 0))

@@ -32,7 +32,6 @@
 
 #include <array>
 #include <string>
-#include <vector>
 
 namespace robocal {
 
@@ -45,12 +44,13 @@ struct UrdfOptions {
 };
 
 // Each joint's velocity (deg/s) and effort (N m) as modelToUrdf writes them: the model's, else
-// the options'. The names of the joints left with a 0 go to `missing` ("J1 velocity").
+// the options'. `missing` gets the joints left with a 0, in words ("J1 velocity, J1 effort"; ""
+// when none).
 struct UrdfJointLimits {
   double velocity_deg_per_s = 0, effort_nm = 0;
 };
 std::array<UrdfJointLimits, kJointCount> urdfLimits(const Model& model, const UrdfOptions& options,
-                                                    std::vector<std::string>* missing = nullptr);
+                                                    std::string* missing = nullptr);
 
 std::string modelToUrdf(const Model& model, const UrdfOptions& options = {});
 
