@@ -134,6 +134,7 @@ void printText(const FitAssessment& a, const Model& calibrated, size_t files) {
                   o.residual_mm, o.robust_sigmas);
   }
   std::printf("model adequacy: %s\n", a.adequacy.summary().c_str());
+  if (a.adequacy.drift.places > 0) std::printf("drift: %s\n", a.adequacy.drift.summary().c_str());
   if (a.compliance) std::printf("gravity compliance: %s\n", a.compliance->summary().c_str());
   std::printf("\nresidual per shell after the fit:\n");
   printShells(a.shells);

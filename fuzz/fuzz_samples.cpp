@@ -48,7 +48,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       bool same =
           a.shell == b.shell && a.ball_index == b.ball_index && a.chuck_index == b.chuck_index &&
           close(a.extension_mm, b.extension_mm, 6e-4, 0) && close(a.lat_deg, b.lat_deg, 6e-5, 0) &&
-          close(a.lon_deg, b.lon_deg, 6e-5, 0) && close(a.length_mm, b.length_mm, 6e-7, 0);
+          close(a.lon_deg, b.lon_deg, 6e-5, 0) && close(a.length_mm, b.length_mm, 6e-7, 0) &&
+          a.time_s.has_value() == b.time_s.has_value() &&
+          (!a.time_s || close(*a.time_s, *b.time_s, 6e-4, 0));
       for (int j = 0; j < kJointCount; ++j)
         same = same && close(a.joints_deg[j], b.joints_deg[j], 6e-7, 0);
       check(same, "sample changed on a round trip", formatSampleRow(a));

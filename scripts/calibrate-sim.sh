@@ -8,7 +8,9 @@
 # robot that is exactly its model). Every point is approached from below in each joint
 # (motion.approach_deg ROBOCAL_APPROACH_DEG, default 0.02; 0 for none) so that backlash is
 # designed out (docs/accuracy.md), and every 20th point is measured again (motion.revisit_every
-# ROBOCAL_REVISIT_EVERY; 0 for none) so that the fit measures the bar's noise.
+# ROBOCAL_REVISIT_EVERY; 0 for none) so that the fit measures the bar's noise, and each shell's
+# first point every 5 minutes of robot time (motion.reference_every_min
+# ROBOCAL_REFERENCE_EVERY_MIN; 0 for none) so that it measures the drift over the run.
 # ROBOCAL_PLAN_BUDGET_MIN=M runs an optimal plan of M minutes of cell time instead of the
 # cell's grid (docs/cell-time.md).
 set -euo pipefail
@@ -25,7 +27,8 @@ realism=${ROBOCAL_REALISM:-typical}
 rm -rf "$out"
 mkdir -p "$out"
 cell=$out/cell.json
-jq ".motion.approach_deg = ${ROBOCAL_APPROACH_DEG:-0.02} | .motion.revisit_every = ${ROBOCAL_REVISIT_EVERY:-20}" \
+jq ".motion.approach_deg = ${ROBOCAL_APPROACH_DEG:-0.02} | .motion.revisit_every = ${ROBOCAL_REVISIT_EVERY:-20}
+    | .motion.reference_every_min = ${ROBOCAL_REFERENCE_EVERY_MIN:-5}" \
   "${ROBOCAL_CELL:-$root/config/cell.json}" >"$cell"
 pids=()
 cleanup() { for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done; }

@@ -13,6 +13,7 @@
 #include <cstring>
 #include <ctime>
 #include <filesystem>
+#include <fstream>
 
 namespace robocal::daemon {
 namespace {
@@ -53,9 +54,16 @@ std::string RunDir::id() const {
 }
 
 void RunDir::appendSample(const Sample& s, double bar_spread_mm) {
+  if (!timed_) {
+    std::ifstream in(file(kSamplesFile));
+    std::string header;
+    std::getline(in, header);
+    timed_ = header.find(std::string(",") + kSamplesTimeColumn) != std::string::npos;
+  }
   char spread[32];
-  std::snprintf(spread, sizeof spread, ",%.4f\n", bar_spread_mm);
-  appendTextFileDurably(file(kSamplesFile), formatSampleRow(s) + spread);
+  std::snprintf(spread, sizeof spread, ",%.4f", bar_spread_mm);
+  appendTextFileDurably(file(kSamplesFile), formatSampleRow(s) + spread +
+                                                (*timed_ ? "," + formatSampleTime(s) : "") + "\n");
 }
 
 std::vector<Sample> RunDir::loadSamples() {
@@ -120,7 +128,8 @@ RunDir RunStore::create(const std::string& plan_text) {
   fs::create_directories(path);
   RunDir run(path);
   writeTextFileAtomic(run.file("plan.json"), plan_text);
-  writeTextFileAtomic(run.file(kSamplesFile), std::string(kSamplesHeader) + ",bar_spread_mm\n");
+  writeTextFileAtomic(run.file(kSamplesFile),
+                      std::string(kSamplesHeader) + ",bar_spread_mm," + kSamplesTimeColumn + "\n");
   run.setState({{"status", "running"}});
   syncDir(runs_dir_);
   return run;

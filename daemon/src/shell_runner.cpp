@@ -6,6 +6,7 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -480,6 +481,9 @@ JointsDeg ShellRunner::recordPoint(const ShellPlan& planned, const PlanStep& ste
   Sample s = shellSample(planned, m);
   s.lat_deg = step.lat_deg;
   s.lon_deg = step.lon_deg;
+  // Unix time: a run resumed after a restart keeps one clock (the drift of a reference pose).
+  s.time_s =
+      std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
   dir_.appendSample(s, m.spread_mm);  // on disk before the robot moves again
   timing.sample_on_disk = Clock::now();
   timing.bar_window_start = m.bar_window_start;

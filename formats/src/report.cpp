@@ -78,6 +78,22 @@ using report_detail::Marker;
 using report_detail::shellsJson;
 using report_detail::SvgChart;
 
+// The drift of the places measured more than once (null figures when not measured).
+ojson driftJson(const Drift& d) {
+  const auto measured = [&](double v) { return d.measured ? ojson(v) : ojson(nullptr); };
+  return {{"measured", d.measured},
+          {"found", d.found},
+          {"significant", d.significant},
+          {"places", d.places},
+          {"readings", d.readings},
+          {"span_min", d.span_min},
+          {"rate_mm_per_h", measured(d.rate_mm_per_h)},
+          {"rate_sigma_mm_per_h", measured(d.rate_sigma_mm_per_h)},
+          {"over_span_mm", measured(d.over_span_mm)},
+          {"limit_mm", d.limit_mm},
+          {"summary", d.summary()}};
+}
+
 double symmetricLimit(const Eigen::VectorXd& r) {
   const double m = r.size() ? r.cwiseAbs().maxCoeff() : 1.0;
   return m > 0 ? m * 1.1 : 1.0;
@@ -352,7 +368,8 @@ nlohmann::ordered_json fitSummaryJson(const FitAssessment& a) {
       {"sigma_mm", a.adequacy.sigma_mm},
       {"lack_of_fit_mm", a.adequacy.unmodelled_bar_mm()},
       {"summary", a.adequacy.summary()},
-      {"patterns", patterns}};
+      {"patterns", patterns},
+      {"drift", driftJson(ad.drift)}};
   if (a.compliance) {
     const ComplianceEstimate& c = *a.compliance;
     ojson joints = ojson::array();

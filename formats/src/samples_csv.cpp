@@ -2,6 +2,7 @@
 
 #include <robocal/formats/csv.hpp>
 
+#include <algorithm>
 #include <array>
 #include <charconv>
 #include <cmath>
@@ -14,15 +15,18 @@ namespace {
 constexpr std::array<const char*, 13> kColumns = {
     "shell", "ball", "chuck", "extension_mm", "lat_deg", "lon_deg",  "j1",
     "j2",    "j3",   "j4",    "j5",           "j6",      "length_mm"};
+constexpr double kMaxTimeS = 1e12;  // Unix time for 30,000 years: printed in a short field
 
 }  // namespace
 
 const char* const kSamplesHeader =
     "shell,ball,chuck,extension_mm,lat_deg,lon_deg,j1,j2,j3,j4,j5,j6,length_mm";
+const char* const kSamplesTimeColumn = "time_s";
 
 std::vector<Sample> parseSamples(const std::string& text, const std::string& source) {
   std::vector<Sample> samples;
   std::array<int, kColumns.size()> column_of{};
+  int time_column = -1;  // the optional time_s
   size_t header_fields = 0;
   bool have_header = false;
   csv::forEachLine(text, [&](int line_no, std::string_view line) {
@@ -38,6 +42,8 @@ std::vector<Sample> parseSamples(const std::string& text, const std::string& sou
           throw FormatError(where + "header has no column '" + kColumns[c] + "' (expected " +
                             kSamplesHeader + ")");
       }
+      for (size_t f = 0; f < fields.size(); ++f)
+        if (fields[f] == kSamplesTimeColumn) time_column = static_cast<int>(f);
       header_fields = fields.size();
       have_header = true;
       return;
@@ -72,6 +78,16 @@ std::vector<Sample> parseSamples(const std::string& text, const std::string& sou
     for (int j = 0; j < kJointCount; ++j) s.joints_deg[j] = v[6 + j];
     s.length_mm = v[12];
     if (s.length_mm <= 0) throw FormatError(where + "column 'length_mm': must be positive");
+    if (time_column >= 0 && !fields[time_column].empty()) {  // empty: not known
+      const std::string_view field = fields[time_column];
+      s.time_s = csv::number(field);
+      if (!s.time_s)
+        throw FormatError(where + "column 'time_s': not a finite number: '" + std::string(field) +
+                          "'");
+      if (std::abs(*s.time_s) > kMaxTimeS)
+        throw FormatError(where + "column 'time_s': expected seconds within +/-1e12, got " +
+                          std::string(field));
+    }
     s.source = source;
     s.source_line = line_no;
     samples.push_back(std::move(s));
@@ -91,9 +107,19 @@ std::string formatSampleRow(const Sample& s) {
   return buf;
 }
 
+std::string formatSampleTime(const Sample& s) {
+  if (!s.time_s) return "";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.3f", *s.time_s);
+  return buf;
+}
+
 std::string formatSamples(const std::vector<Sample>& samples) {
-  std::string out = std::string(kSamplesHeader) + "\n";
-  for (const Sample& s : samples) out += formatSampleRow(s) + "\n";
+  const bool timed = std::any_of(samples.begin(), samples.end(),
+                                 [](const Sample& s) { return s.time_s.has_value(); });
+  std::string out = std::string(kSamplesHeader) + (timed ? ",time_s\n" : "\n");
+  for (const Sample& s : samples)
+    out += formatSampleRow(s) + (timed ? "," + formatSampleTime(s) : "") + "\n";
   return out;
 }
 

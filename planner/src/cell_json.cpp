@@ -101,6 +101,7 @@ CellConfig cellFromJson(const json& root, const std::string& source) {
     o.get("sample_step_mm", c.motion.sample_step_mm);
     o.get("approach_deg", c.motion.approach_deg, 0, 1);
     o.get("revisit_every", c.motion.revisit_every, 0, 1000);
+    o.get("reference_every_min", c.motion.reference_every_min, 0, 1000);
   });
   section(top, "model_uncertainty", [&](Object& o) {
     o.get("translation_sigma_mm", c.uncertainty.translation_sigma_mm);
@@ -186,7 +187,8 @@ nlohmann::ordered_json cellToJson(const CellConfig& c) {
                  {"via_tolerance_mm", c.motion.via_tolerance_mm},
                  {"sample_step_mm", c.motion.sample_step_mm},
                  {"approach_deg", c.motion.approach_deg},
-                 {"revisit_every", c.motion.revisit_every}};
+                 {"revisit_every", c.motion.revisit_every},
+                 {"reference_every_min", c.motion.reference_every_min}};
   j["model_uncertainty"] = {{"translation_sigma_mm", c.uncertainty.translation_sigma_mm},
                             {"link_angle_sigma_deg", c.uncertainty.link_angle_sigma_deg},
                             {"joint_offset_sigma_deg", c.uncertainty.joint_offset_sigma_deg},

@@ -12,6 +12,8 @@ namespace {
 using nlohmann::json;
 using nlohmann::ordered_json;
 
+constexpr int kMaxVisit = 10000;  // a reference pose every minute of a week-long shell
+
 // Rounds to 1e-9 so that files stay readable; joints keep far more precision than the robot.
 // Values too large to scale (which need no rounding) stay as they are, not infinity (null).
 double tidy(double v) {
@@ -69,7 +71,8 @@ class Reader {
     s.lat_deg = number(j, where, "lat_deg");
     s.lon_deg = number(j, where, "lon_deg");
     s.visit = count(j, where, "visit", 0);
-    if (s.visit > 1) fail(where + ".visit", "expected 0 (first) or 1 (revisit)");
+    if (s.visit > kMaxVisit)
+      fail(where + ".visit", "expected 0 (first) to " + std::to_string(kMaxVisit) + " (revisits)");
     return s;
   }
   // An optional count of a summary (points, rank): a whole number from 0 to 1e9, else fallback

@@ -697,33 +697,59 @@ ShellPlan ShellPlanner::joinPoints(const Connection& c, double extension_mm, int
   };
   // The order of the measurements: every point once, and with motion.revisit_every, after every
   // that many points the one before the last again (the arm has moved on and comes back).
-  std::vector<std::pair<size_t, int>> visits;  // (index in chosen, visit)
+  std::vector<std::pair<size_t, bool>> visits;  // (index in chosen, a revisit)
   const int every = cell_.motion.revisit_every;
   for (size_t n = 0; n < chosen.size(); ++n) {
-    visits.push_back({n, 0});
-    if (every > 0 && n >= 2 && n % static_cast<size_t>(every) == 0) visits.push_back({n - 1, 1});
+    visits.push_back({n, false});
+    if (every > 0 && n >= 2 && n % static_cast<size_t>(every) == 0) visits.push_back({n - 1, true});
   }
   std::vector<std::optional<Node>> placed(chosen.size());  // each point's first visit
+  std::vector<int> visits_of(chosen.size(), 0);            // and how often it was measured
   Node prev;
-  for (const auto& [n, visit] : visits) {
+  // A point measured again: the same joints, reached the same way; a revisit that cannot be
+  // joined is left out (it measures the noise or the drift, not the robot: nothing of the grid is
+  // lost). Not straight after its last visit (the next point was dropped): the arm must have
+  // moved.
+  auto revisit = [&](size_t n) {
     const ShellPoint& ch = chosen[n];
-    if (visit > 0) {
-      // The same joints, reached the same way; a revisit that cannot be joined is left out (it
-      // measures the noise, not the robot: nothing of the grid is lost).
-      // Not straight after its first visit (the next point was dropped): the arm must have moved.
-      const bool just_measured = !shell.steps.empty() && shell.steps.back().lat_deg == ch.lat_deg &&
-                                 shell.steps.back().lon_deg == ch.lon_deg;
-      if (!placed[n] || just_measured) continue;
-      std::vector<PlanStep> vias;
-      std::string ignored;
-      if (!planApproach(c, radius, shell.config, prev, *placed[n], vias,
-                        shell.summary.max_deviation_mm, ignored))
-        continue;
-      shell.steps.insert(shell.steps.end(), vias.begin(), vias.end());
-      shell.steps.push_back({StepKind::kPoint, placed[n]->q, ch.lat_deg, ch.lon_deg, 1});
-      prev = *placed[n];
+    const bool just_measured = !shell.steps.empty() && shell.steps.back().lat_deg == ch.lat_deg &&
+                               shell.steps.back().lon_deg == ch.lon_deg;
+    if (!placed[n] || just_measured) return;
+    std::vector<PlanStep> vias;
+    std::string ignored;
+    if (!planApproach(c, radius, shell.config, prev, *placed[n], vias,
+                      shell.summary.max_deviation_mm, ignored))
+      return;
+    shell.steps.insert(shell.steps.end(), vias.begin(), vias.end());
+    shell.steps.push_back({StepKind::kPoint, placed[n]->q, ch.lat_deg, ch.lon_deg, visits_of[n]++});
+    prev = *placed[n];
+  };
+  // The reference pose (motion.reference_every_min): the shell's first data point, measured again
+  // when that much planned robot time has passed since its last measurement, and at the end.
+  const double reference_every_s = 60 * cell_.motion.reference_every_min;
+  std::optional<size_t> reference;
+  std::size_t reference_step = 0;  // index in shell.steps of its last measurement
+  auto referenceDue = [&] {
+    if (!reference) return false;
+    double since_s = 0;
+    for (std::size_t i = reference_step + 1; i < shell.steps.size(); ++i) {
+      since_s += moveDuration(shell.steps[i - 1].joints_deg, shell.steps[i].joints_deg);
+      if (shell.steps[i].kind == StepKind::kPoint) since_s += cell_.motion.settle_s;
+    }
+    return since_s >= reference_every_s;
+  };
+  auto measureReference = [&] {
+    const std::size_t before = shell.steps.size();
+    revisit(*reference);
+    if (shell.steps.size() > before) reference_step = shell.steps.size() - 1;
+  };
+  for (const auto& [n, is_revisit] : visits) {
+    const ShellPoint& ch = chosen[n];
+    if (is_revisit) {
+      revisit(n);
       continue;
     }
+    if (reference && referenceDue()) measureReference();
     const Eigen::Isometry3d pose = poseOf(ch);
     const IkSolution s = ik_.solve(pose, shell.config, &ch.joints_deg);
     const std::string problem = s.ok() ? poseProblem(c, radius, s.joints_deg, tol)
@@ -776,7 +802,13 @@ ShellPlan ShellPlanner::joinPoints(const Connection& c, double extension_mm, int
     shell.steps.push_back({StepKind::kPoint, node.q, ch.lat_deg, ch.lon_deg});
     prev = node;
     placed[n] = node;
+    visits_of[n] = 1;
+    if (!reference && reference_every_s > 0) {
+      reference = n;
+      reference_step = shell.steps.size() - 1;
+    }
   }
+  if (reference && reference_step + 1 < shell.steps.size()) measureReference();  // the shell's end
   finishShell(shell);
   return shell;
 }

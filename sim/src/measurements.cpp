@@ -173,6 +173,7 @@ std::vector<Sample> measureShell(const TrueRobot& truth, const ShellRequest& req
     }
     Sample s = makeSample(req.shell, c, req.extension_mm, pose.lat_deg, pose.lon_deg,
                           pose.joints_deg, length_mm);
+    s.time_s = track.minutes * 60;
     if (noise.length_sigma_mm > 0) s.length_mm += length_noise(rng);
     if (noise.joint_quantum_deg > 0)
       for (int j = 0; j < kJointCount; ++j)

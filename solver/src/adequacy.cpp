@@ -113,6 +113,7 @@ std::string Adequacy::summary() const {
                     revisited_places, *noise_mm);
       out += buf;
     }
+    if (drift.found) out += "; " + drift.summary();
     return out;
   }
   if (patterns_found) {
@@ -141,6 +142,7 @@ std::string Adequacy::summary() const {
       out += buf;
     }
   }
+  if (drift.found) out += "; " + drift.summary();
   return out;
 }
 
@@ -166,6 +168,23 @@ Adequacy testAdequacy(const Model& calibrated, const std::vector<Sample>& sample
   Eigen::MatrixXd approach = Eigen::MatrixXd::Zero(n, kJointCount);
   Eigen::MatrixXd gravity = Eigen::MatrixXd::Zero(n, 2);
   Eigen::MatrixXd time = Eigen::MatrixXd::Zero(n, 1);
+  // The place in the run, 0 to 1: by the samples' times when they all have one (a pause shows),
+  // else by their order.
+  const bool timed = std::all_of(samples.begin(), samples.end(),
+                                 [](const Sample& s) { return s.time_s.has_value(); });
+  double t_first = 0, t_last = 0;
+  if (timed) {
+    const auto [lo, hi] =
+        std::minmax_element(samples.begin(), samples.end(),
+                            [](const Sample& x, const Sample& y) { return *x.time_s < *y.time_s; });
+    t_first = *lo->time_s;
+    t_last = *hi->time_s;
+  }
+  auto runFraction = [&](Eigen::Index i) {
+    if (timed && t_last > t_first)
+      return (*samples[static_cast<size_t>(i)].time_s - t_first) / (t_last - t_first);
+    return static_cast<double>(i) / static_cast<double>(n - 1);
+  };
   for (Eigen::Index i = 0; i < n; ++i) {
     const Sample& s = samples[static_cast<size_t>(i)];
     if (i > 0 && sameShell(s, samples[static_cast<size_t>(i - 1)]))
@@ -189,7 +208,7 @@ Adequacy testAdequacy(const Model& calibrated, const std::vector<Sample>& sample
       const int p = linkParamIndex(k);
       scale += jacobian(i, p) * l.x_mm + jacobian(i, p + 1) * l.y_mm + jacobian(i, p + 2) * l.z_mm;
     }
-    time(i, 0) = scale * static_cast<double>(i) / static_cast<double>(n - 1);
+    time(i, 0) = scale * runFraction(i);
   }
 
   struct Block {
@@ -228,6 +247,7 @@ Adequacy testAdequacy(const Model& calibrated, const std::vector<Sample>& sample
   if (!a.ok) a.unmodelled_mm = regress(found_features, residuals, sigma_mm).rms_mm;
 
   measureNoise(samples, residuals, a);
+  a.drift = measureDrift(samples, residuals, false_alarm);
   if (a.noise_mm && *a.noise_mm > 0 && a.noise_dof >= 10) {
     // sigma^2 / noise^2 is about 1 when the model is right; the noise's own estimate may be low
     // by chance, by chi2(dof)/dof at its lower quantile.

@@ -91,15 +91,10 @@ TEST_CASE("robocal solve --report writes the figures and report.json") {
 TEST_CASE("robocal solve names an outlier by file and line, and drops it only when asked") {
   TempDir dir;
   simulate(dir);
-  // Bump line 40's bar length by 2 mm.
-  std::string text = readTextFile(dir / "s.csv");
-  size_t pos = 0;
-  for (int line = 1; line < 40; ++line) pos = text.find('\n', pos) + 1;
-  const size_t end = text.find('\n', pos);
-  const size_t comma = text.rfind(',', end);
-  const double length = std::stod(text.substr(comma + 1, end - comma - 1));
-  text.replace(comma + 1, end - comma - 1, std::to_string(length + 2.0));
-  std::ofstream(dir / "s.csv") << text;
+  // Bump line 40's bar length by 2 mm (the header is line 1).
+  std::vector<Sample> samples = loadSamplesFile(dir / "s.csv");
+  samples[40 - 2].length_mm += 2.0;
+  saveSamplesFile(dir / "s.csv", samples);
 
   // Kept, the outlier makes the fit unusable (exit 3), and the problem names it and the fix.
   auto r = runRobocal("solve --model " + kModel + " " + (dir / "s.csv") + " --json", false);
@@ -193,20 +188,12 @@ TEST_CASE("robocal solve names a bad shell among good ones") {
   TempDir dir;
   simulate(dir);
   // Shell 4's lengths get three times the noise: its RMS stands out, as a loose chuck's would.
-  std::string text = readTextFile(dir / "s.csv");
-  std::istringstream in(text);
-  std::ostringstream out;
+  std::vector<Sample> samples = loadSamplesFile(dir / "s.csv");
   std::mt19937 rng(1);
   std::normal_distribution<double> noise(0.0, 0.25);
-  for (std::string line; std::getline(in, line);) {
-    if (line.rfind("4,", 0) == 0) {
-      const size_t comma = line.rfind(',');
-      line = line.substr(0, comma + 1) +
-             std::to_string(std::stod(line.substr(comma + 1)) + noise(rng));
-    }
-    out << line << "\n";
-  }
-  std::ofstream(dir / "s.csv") << out.str();
+  for (Sample& s : samples)
+    if (s.shell == 4) s.length_mm += noise(rng);
+  saveSamplesFile(dir / "s.csv", samples);
   const auto r = runRobocal("solve --model " + kModel + " " + (dir / "s.csv") + " --json", false);
   const auto j = nlohmann::json::parse(r.output);
   INFO(j["problems"].dump());

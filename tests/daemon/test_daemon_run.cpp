@@ -442,11 +442,14 @@ TEST_CASE("a kill while a set is fitted: resume fits it again and the run ends w
         "ERROR");
 }
 
-TEST_CASE("revisits are measured through robocald, each once, across a kill and a resume",
-          "[e2e]") {
+TEST_CASE(
+    "revisits and a reference pose are measured through robocald, each as planned, across a "
+    "kill and a resume, with their times",
+    "[e2e]") {
   Cell cell({"B1C1", "B2C2"}, 14);
   json cell_file = json::parse(readTextFile(cell.dir / "cell.json"));
   cell_file["motion"]["revisit_every"] = 3;
+  cell_file["motion"]["reference_every_min"] = 0.5;
   std::ofstream(cell.dir / "cell.json") << cell_file.dump(1);
   cell.daemon->stop();
   cell.daemon->start();
@@ -469,17 +472,28 @@ TEST_CASE("revisits are measured through robocald, each once, across a kill and 
     state = cell.operate(*c, {"done", "paused", "error"}, 240);
   }
   REQUIRE(state == "done");
-  // Every place as many times as the plan measures it (a point and its revisit: twice).
+  // Every place as many times as the plan measures it (a point and its revisit: twice; the
+  // reference pose: more), each with its Unix time, in order across the kill.
   std::map<std::tuple<int, long, long>, int> planned, measured;
   for (const auto& sh : loadPlanFile(cell.runDir(run_id) + "/plan.json").shells)
     for (const auto& st : sh.steps)
       if (st.kind == StepKind::kPoint)
         ++planned[{sh.shell, std::lround(st.lat_deg * 1000), std::lround(st.lon_deg * 1000)}];
-  for (const Sample& s : loadSamplesFile(cell.runDir(run_id) + "/samples.csv"))
+  const std::vector<Sample> samples = loadSamplesFile(cell.runDir(run_id) + "/samples.csv");
+  double last_time_s = 1.7e9;  // 2023: any clock in this test is later
+  for (const Sample& s : samples) {
     ++measured[{s.shell, std::lround(s.lat_deg * 1000), std::lround(s.lon_deg * 1000)}];
-  int twice = 0;
-  for (const auto& [place, n] : planned) twice += n == 2;
+    REQUIRE(s.time_s);
+    CHECK(*s.time_s >= last_time_s);
+    last_time_s = *s.time_s;
+  }
+  int twice = 0, more = 0;
+  for (const auto& [place, n] : planned) {
+    twice += n == 2;
+    more += n > 2;
+  }
   CHECK(twice >= 4);
+  CHECK(more >= 2);  // each shell's reference pose
   CHECK(measured == planned);
   // The fit measured the bar's noise from them.
   json result = c->request({{"cmd", "result"}}, 10, "RESULT");
@@ -488,6 +502,10 @@ TEST_CASE("revisits are measured through robocald, each once, across a kill and 
     result = c->request({{"cmd", "result"}}, 10, "RESULT");
   }
   INFO(result.dump().substr(0, 2000));
-  CHECK(result["adequacy"]["revisited_places"] == twice);
+  CHECK(result["adequacy"]["revisited_places"] == twice + more);
   CHECK(result["adequacy"]["noise_mm"].get<double>() > 0);
+  const json& drift = result["adequacy"]["drift"];
+  CHECK(drift["measured"] == true);
+  CHECK(drift["places"] == twice + more);
+  CHECK(drift["span_min"].get<double>() > 0);
 }

@@ -4,6 +4,7 @@
 #include "../cli/cli_helpers.hpp"
 
 #include <robocal/daemon/run_store.hpp>
+#include <robocal/formats/samples_csv.hpp>
 
 #include <algorithm>
 #include <fstream>
@@ -60,4 +61,33 @@ TEST_CASE("the newest fit on disk is found again, and damaged result files are s
   std::sort(skipped.begin(), skipped.end());
   CHECK(skipped[0].find("result-set2.json") != std::string::npos);
   CHECK(skipped[1].find("result-set3.json") != std::string::npos);
+}
+
+TEST_CASE("samples carry their time; a run folder from before the time column keeps its layout") {
+  TempDir dir;
+  daemon::RunStore store(dir.path.string());
+  Sample s;
+  s.shell = 1;
+  s.length_mm = 150.1;
+  s.time_s = 1764921600.5;
+  daemon::RunDir fresh = store.create("{}\n");
+  fresh.appendSample(s, 0.002);
+  fresh.appendSample(s, 0.003);
+  std::vector<Sample> back = fresh.loadSamples();
+  REQUIRE(back.size() == 2);
+  REQUIRE(back[1].time_s);
+  CHECK(*back[1].time_s == Approx(1764921600.5).margin(1e-3));
+
+  // A folder an older robocald wrote (no time_s in its header), resumed by this one: the new rows
+  // have the header's fields, so the file still loads, without times.
+  daemon::RunDir old = store.create("{}\n");
+  std::ofstream(old.file("samples.csv"))
+      << kSamplesHeader << ",bar_spread_mm\n"
+      << "1,1,1,0.000,10.0000,0.0000,1,2,3,4,5,6,150.000000,0.0010\n";
+  daemon::RunDir reopened(old.path());
+  reopened.appendSample(s, 0.002);
+  back = reopened.loadSamples();
+  REQUIRE(back.size() == 2);
+  CHECK_FALSE(back[1].time_s);
+  CHECK(back[1].length_mm == Approx(150.1));
 }

@@ -64,3 +64,27 @@ TEST_CASE("malformed sample rows are reported with their line number") {
   CHECK_THROWS_WITH(parseSamples(header + "1,1,1,0,10,0,1,2,3,4,5,6,-1\n", "s.csv"),
                     Contains("s.csv:2: column 'length_mm': must be positive"));
 }
+
+TEST_CASE("the time of measurement is an optional column: kept when known, empty when not") {
+  Sample timed = sample(1, 0, 0, 250.0);
+  timed.time_s = 1764921600.125;  // Unix time, as the daemon writes it
+  const Sample untimed = sample(1, 1, 1, 251.0);
+  const std::string text = formatSamples({timed, untimed});
+  CHECK_THAT(text, Contains(std::string(kSamplesHeader) + ",time_s\n"));
+  const auto out = parseSamples(text, "s.csv");
+  REQUIRE(out.size() == 2);
+  REQUIRE(out[0].time_s);
+  CHECK(*out[0].time_s == Approx(1764921600.125).margin(1e-3));
+  CHECK_FALSE(out[1].time_s);
+
+  // Without any time the file is the 13 columns it always was, and old files load unchanged.
+  const std::string plain = formatSamples({untimed});
+  CHECK(plain.find("time_s") == std::string::npos);
+  CHECK_FALSE(parseSamples(plain)[0].time_s);
+
+  const std::string header = std::string(kSamplesHeader) + ",time_s\n";
+  CHECK_THROWS_WITH(parseSamples(header + "1,1,1,0,10,0,1,2,3,4,5,6,100,soon\n", "s.csv"),
+                    Contains("s.csv:2: column 'time_s': not a finite number: 'soon'"));
+  CHECK_THROWS_WITH(parseSamples(header + "1,1,1,0,10,0,1,2,3,4,5,6,100,1e13\n", "s.csv"),
+                    Contains("s.csv:2: column 'time_s': expected seconds within +/-1e12"));
+}

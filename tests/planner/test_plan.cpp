@@ -459,8 +459,68 @@ TEST_CASE("with revisit_every a few points are measured again, reached the same 
   CHECK(replanned_revisits == revisits);
   std::string text = formatPlan(plan);
   const auto at = text.find("\"lat_deg\"", text.find("\"steps\""));
-  text.insert(at, "\"visit\": 2, ");
+  text.insert(at, "\"visit\": 10001, ");
   CHECK_THROWS_WITH(parsePlan(text, "p.json"), Catch::Contains("visit"));
+}
+
+TEST_CASE("with reference_every_min the shell's first point is measured again every few minutes") {
+  CellConfig cell = defaultCell();
+  cell.motion.approach_deg = 0.02;
+  cell.motion.reference_every_min = 2;
+  const ShellPlanner planner(nominal(), cell);
+  const ShellPlan shell = planner.planShell({0, 0}, 0, 1);
+  const auto first_point = std::find_if(shell.steps.begin(), shell.steps.end(),
+                                        [](auto& s) { return s.kind == StepKind::kPoint; });
+  REQUIRE(first_point != shell.steps.end());
+  auto isReference = [&](const PlanStep& s) {
+    return s.kind == StepKind::kPoint && s.lat_deg == first_point->lat_deg &&
+           s.lon_deg == first_point->lon_deg;
+  };
+  // The planned robot time from each measurement of the reference to the next.
+  std::vector<double> gaps_s;
+  double since_s = 0, longest_point_s = 0, point_s = 0;
+  int expected_visit = 0;
+  for (size_t i = 0; i < shell.steps.size(); ++i) {
+    const PlanStep& step = shell.steps[i];
+    const JointsDeg& from = i == 0 ? shell.connect.joints_deg : shell.steps[i - 1].joints_deg;
+    const double move_s =
+        (step.joints_deg - from).cwiseAbs().maxCoeff() / cell.motion.joint_speed_deg_per_s +
+        cell.motion.move_overhead_s;
+    since_s += move_s;
+    point_s += move_s;
+    if (step.kind != StepKind::kPoint) continue;
+    since_s += cell.motion.settle_s;
+    point_s += cell.motion.settle_s;
+    longest_point_s = std::max(longest_point_s, point_s);
+    point_s = 0;
+    if (!isReference(step)) continue;
+    CHECK(step.visit == expected_visit++);  // 0, 1, 2, ...: each measurement counted
+    CHECK((step.joints_deg - first_point->joints_deg).cwiseAbs().maxCoeff() < 1e-9);
+    if (step.visit > 0) gaps_s.push_back(since_s);
+    since_s = 0;
+  }
+  const double shell_min = shell.summary.duration_s / 60;
+  INFO("shell of " << shell_min << " min, " << gaps_s.size() << " repeats");
+  REQUIRE(gaps_s.size() >= static_cast<size_t>(shell_min / 2) - 1);
+  // Every 2 minutes, give or take the point that crosses it; the last one closes the shell.
+  for (size_t g = 0; g + 1 < gaps_s.size(); ++g) {
+    CHECK(gaps_s[g] >= 120 - 1e-9);
+    CHECK(gaps_s[g] <= 120 + 2 * longest_point_s);
+  }
+  CHECK(isReference(shell.steps.back()));
+  CHECK(pointsNotApproachedFromBelow(shell) == 0);
+  Plan plan;
+  plan.cell = cell;
+  plan.shells = {shell};
+  CHECK(checkPlan(nominal(), cell, plan).empty());
+  // The counts survive the plan file and a re-plan of the rest (a resume).
+  const Plan back = parsePlan(formatPlan(plan), "p.json");
+  REQUIRE(back.shells[0].steps.size() == shell.steps.size());
+  for (size_t i = 0; i < shell.steps.size(); ++i)
+    CHECK(back.shells[0].steps[i].visit == shell.steps[i].visit);
+  CHECK(parseCell(cellToJson(cell).dump(), "c.json").motion.reference_every_min == 2);
+  const ShellPlan rest = planner.replanRemaining(shell, 1, shell.connect.joints_deg);
+  CHECK(std::count_if(rest.steps.begin(), rest.steps.end(), isReference) == expected_visit);
 }
 
 TEST_CASE("the deflection forecast grows with the model uncertainty") {

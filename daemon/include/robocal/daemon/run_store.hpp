@@ -20,7 +20,8 @@ class RunDir {
   std::string id() const;
   std::string file(const std::string& name) const { return path_ + "/" + name; }
 
-  // Appends one row (the samples format plus bar_spread_mm) and fsyncs it.
+  // Appends one row (the samples format plus bar_spread_mm and time_s) and fsyncs it. A run folder
+  // written before time_s was a column gets rows without it, as its header says.
   void appendSample(const Sample& sample, double bar_spread_mm);
   // The samples on disk. A row torn by a crash (no line ending) is cut off first.
   std::vector<Sample> loadSamples();
@@ -33,6 +34,7 @@ class RunDir {
 
  private:
   std::string path_;
+  std::optional<bool> timed_;  // whether the samples file has a time_s column; read once
 };
 
 // Whether the ball-bar may be attached to the robot, kept across runs and restarts in

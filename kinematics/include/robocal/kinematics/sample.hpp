@@ -4,6 +4,7 @@
 
 #include <robocal/kinematics/model.hpp>
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,8 +19,11 @@ struct Sample {
   double lon_deg = 0;
   JointsDeg joints_deg = JointsDeg::Zero();
   double length_mm = 0;  // absolute ball-centre to chuck-centre distance
-  std::string source;    // file it came from ("" when made in memory)
-  int source_line = 0;   // 1-based line in that file (0 when made in memory)
+  // When it was measured, seconds on the run's clock (only differences count: the daemon writes
+  // Unix time, `robocal simulate` the simulated robot time); absent when not known.
+  std::optional<double> time_s;
+  std::string source;   // file it came from ("" when made in memory)
+  int source_line = 0;  // 1-based line in that file (0 when made in memory)
 };
 
 // A ball-chuck pair, 0-based. Written "B1C2" (1-based) at the interfaces.

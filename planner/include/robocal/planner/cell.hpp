@@ -64,6 +64,11 @@ struct MotionSettings {
   // again (its revisit, reached the same way): the revisits measure the bar's own noise, so a fit
   // judges its residual against it (solver/adequacy.hpp) instead of assuming it. 0: none.
   int revisit_every = 0;
+  // When positive, a shell's first data point (its reference pose) is measured again whenever this
+  // many minutes of planned robot time have passed since it last was, and once more at the shell's
+  // end: the change of its reading over time is the drift of the robot and the bar (warm-up),
+  // reported by every fit (solver/drift.hpp). 0: none.
+  double reference_every_min = 0;
 };
 
 // Model error assumed by the plan's forecast of the bar's deflection: Gaussian perturbations of

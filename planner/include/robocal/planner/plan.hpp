@@ -28,7 +28,9 @@ struct PlanStep {
   StepKind kind = StepKind::kPoint;
   JointsDeg joints_deg = JointsDeg::Zero();
   double lat_deg = 0, lon_deg = 0;  // where the ball is on the shell (vias too)
-  // A point's measurement of the same place: 0 the first, 1 its revisit (motion.revisit_every).
+  // A point's measurement of the same place: 0 the first, then 1, 2, ... for its revisits
+  // (motion.revisit_every) and, for a shell's reference pose, its repeats
+  // (motion.reference_every_min).
   int visit = 0;
 };
 

@@ -8,7 +8,7 @@
 //   - gravity torque: joints 2 and 3 twisting with the torque the arm's weight puts on them:
 //     (dL/dtheta_j) * ((w - o_j) x down) . z_j, w the wrist centre, o_j and z_j joint j's axis;
 //   - time: the links growing over the run (warm-up): t * dL/d(scale of the link translations),
-//     t the sample's place in the run, 0 to 1.
+//     t the sample's place in the run, 0 to 1 (by its time_s when every sample has one).
 // A pattern is found when the residual's reduction by it, over sigma^2, exceeds the chi-square
 // quantile of its features at `false_alarm` (1e-3): on an ideal robot it fires about once in a
 // thousand fits. Its size is the RMS of the fitted pattern.
@@ -21,6 +21,7 @@
 
 #include <robocal/kinematics/model.hpp>
 #include <robocal/kinematics/sample.hpp>
+#include <robocal/solver/drift.hpp>
 
 #include <Eigen/Core>
 #include <optional>
@@ -58,6 +59,9 @@ struct Adequacy {
   // rate (judged from 10 degrees of freedom), and whether the fit exceeds it.
   double fit_over_noise = 0, fit_over_noise_limit = 0;
   bool lack_of_fit = false;
+  // The drift over the run from the places measured more than once (solver/drift.hpp): reported
+  // and flagged, not a reason to refuse the fit by itself.
+  Drift drift;
   // The error the model does not contain, RMS along the bar: the found patterns' part, or the
   // residual in excess of the measured noise, sqrt(sigma^2 - noise^2), when there is a lack of
   // fit and that is larger; 0 for an adequate fit. The calibrated model carries it
