@@ -1,7 +1,9 @@
-// robocal export: a model in another format for other tools. So far one: URDF
-// (formats/include/robocal/formats/urdf.hpp, docs/export.md).
+// robocal export: a model in another format for other tools: URDF
+// (formats/include/robocal/formats/urdf.hpp), the frames as JSON and a standard DH table
+// (formats/include/robocal/formats/frames.hpp); docs/export.md.
 #include "args.hpp"
 
+#include <robocal/formats/frames.hpp>
 #include <robocal/formats/model_json.hpp>
 #include <robocal/formats/urdf.hpp>
 
@@ -15,6 +17,7 @@ namespace {
 constexpr const char* kHelp =
     R"(usage: robocal export --urdf --model MODEL --out FILE [--name ROBOT]
                       [--velocity-deg-per-s V] [--effort-nm E]
+       robocal export --frames | --dh --model MODEL --out FILE [--parallel-tolerance-deg T]
 
 Writes the model as a URDF file for tools that read URDF (ROS, visualizers, planners): six
 revolute joints about their z axes, from the link chuck_fixture (the model's global frame, the
@@ -31,12 +34,24 @@ cannot move: they come from the model's joints (velocity_deg_per_s, effort_nm), 
 the model has none of, from --velocity-deg-per-s and --effort-nm (take them from the robot's
 data sheet); without either the export is refused, naming the joints.
 
-  --urdf                  write URDF (the only format so far)                     required
+--frames writes the model's chain as JSON matrices and quaternions (mm, deg) with each joint's
+axis at zero readings, the balls, the chucks and the DH table: for tools that multiply frames
+without robocal's conventions. --dh writes a standard DH table (CSV with a commented base and
+tool transform) for analytic-IK code. DH holds four numbers a link where the model has six: it is
+exact except where consecutive axes are within --parallel-tolerance-deg of parallel (a PUMA's
+joints 2 and 3), which it takes as parallel; the error that costs against the model, over 1,000
+joint vectors within the limits, is printed and written with the table. Both leave out gravity
+compliance (a rigid arm).
+
+  --urdf                  write URDF                                     one of the three
+  --frames                write the frames as JSON                       one of the three
+  --dh                    write a standard DH table (CSV)                one of the three
   --model FILE            model to export (model format)                          required
-  --out FILE              URDF file to write (replaced whole, never half-written) required
+  --out FILE              file to write (replaced whole, never half-written)      required
   --name ROBOT            the robot's name in the URDF       [from the model's name]
   --velocity-deg-per-s V  rated joint speed for joints the model has none of  [the model's]
   --effort-nm E           rated joint torque for joints the model has none of [the model's]
+  --parallel-tolerance-deg T  axes this close to parallel are parallel in DH  [0.5]
 
 exit status: 0 written, 1 an unreadable model or an unwritable file, 2 a usage error
 )";
@@ -56,14 +71,40 @@ std::string shortest(double value) {
   return std::string(text, std::to_chars(text, text + sizeof text, value).ptr);
 }
 
+// --frames or --dh.
+int writeFrames(const Args& args, const std::string& model_path, const std::string& out) {
+  const double tolerance_deg = args.number("parallel-tolerance-deg", kDhParallelToleranceDeg);
+  if (!(tolerance_deg >= 0 && tolerance_deg < 90))
+    throw UsageError("--parallel-tolerance-deg expects degrees from 0 to 90, not '" +
+                     args.get("parallel-tolerance-deg", "") + "'");
+  const Model model = loadModelFile(model_path);
+  const DhTable dh = dhFromModel(model, tolerance_deg);
+  const std::string source = std::filesystem::absolute(model_path).lexically_normal().string();
+  writeTextFileAtomic(out, args.flag("frames") ? modelFramesJson(model, dh, source).dump(1) + "\n"
+                                               : dhTableCsv(model, dh, source));
+  std::printf("wrote %s: %s of \"%s\"\n", out.c_str(),
+              args.flag("frames") ? "the frames and the DH table" : "the DH table",
+              model.name.c_str());
+  std::printf("DH table: %s\n", dhErrorSummary(dh).c_str());
+  if (dh.max_position_error_mm > 1e-6)
+    std::printf(
+        "the table is not exact: use the model file (robocal compensate) or --frames where that "
+        "error matters; --parallel-tolerance-deg 0 makes it exact with far-away frames\n");
+  return 0;
+}
+
 int run(const std::vector<std::string>& argv) {
-  const Args args(argv, {"model", "out", "name", "velocity-deg-per-s", "effort-nm"},
-                  {"urdf", "help"});
+  const Args args(
+      argv, {"model", "out", "name", "velocity-deg-per-s", "effort-nm", "parallel-tolerance-deg"},
+      {"urdf", "frames", "dh", "help"});
   if (args.flag("help")) {
     std::fputs(kHelp, stdout);
     return 0;
   }
-  if (!args.flag("urdf")) throw UsageError("say which format to write: --urdf");
+  const int formats = args.flag("urdf") + args.flag("frames") + args.flag("dh");
+  if (formats != 1)
+    throw UsageError(formats == 0 ? "say which format to write: --urdf, --frames or --dh"
+                                  : "one format at a time: --urdf, --frames or --dh");
   if (!args.positional().empty())
     throw UsageError("unexpected argument '" + args.positional().front() + "'");
   const std::string model_path = args.required("model");
@@ -74,6 +115,13 @@ int run(const std::vector<std::string>& argv) {
   if (std::filesystem::equivalent(out, model_path, ec))
     throw UsageError("--out " + out + " is the model file itself");
 
+  if (!args.flag("urdf")) {
+    for (const char* key : {"name", "velocity-deg-per-s", "effort-nm"})
+      if (args.has(key)) throw UsageError(std::string("--") + key + " is for --urdf only");
+    return writeFrames(args, model_path, out);
+  }
+  if (args.has("parallel-tolerance-deg"))
+    throw UsageError("--parallel-tolerance-deg is for --frames and --dh only");
   const Model model = loadModelFile(model_path);
   UrdfOptions options;
   options.robot_name = args.get("name", urdfRobotName(model));
@@ -112,7 +160,10 @@ int run(const std::vector<std::string>& argv) {
   return 0;
 }
 
-const RegisterCommand registered({"export", "write a model as URDF for other tools", run});
+const RegisterCommand registered({"export",
+                                  "write a model as URDF, frames JSON or a DH table for other "
+                                  "tools",
+                                  run});
 
 }  // namespace
 }  // namespace robocal::cli

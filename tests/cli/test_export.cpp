@@ -6,6 +6,7 @@
 #include <robocal/formats/urdf.hpp>
 
 #include <filesystem>
+#include <nlohmann/json.hpp>
 
 using namespace robocal;
 using namespace robocal::test;
@@ -93,4 +94,43 @@ TEST_CASE("robocal export: usage errors and unreadable or unwritable files are n
   CHECK(r.exit_code == 2);
   CHECK_THAT(r.output, Contains("--velocity-deg-per-s expects a positive number, not '0'"));
   CHECK_FALSE(std::filesystem::exists(dir / "x.urdf"));
+}
+
+TEST_CASE("robocal export --frames and --dh write the frames and the DH table with its error") {
+  const TempDir dir;
+  auto r = runRobocal("export --dh --model " + kModel + " --out " + (dir / "puma.csv"));
+  REQUIRE(r.exit_code == 0);
+  CHECK_THAT(r.output, Catch::Matchers::Contains("joints taken as parallel: 2-3"));
+  const std::string table = readTextFile(dir / "puma.csv");
+  CHECK_THAT(table, Catch::Matchers::Contains("joint,theta_offset_deg,d_mm,a_mm,alpha_deg,gain"));
+  CHECK_THAT(table, Catch::Matchers::Contains("2,0.000000000,0.000000,431.800000,"));  // Lloyd's a2
+  r = runRobocal("export --frames --model " + kModel + " --out " + (dir / "puma.json"));
+  REQUIRE(r.exit_code == 0);
+  const auto frames = nlohmann::json::parse(readTextFile(dir / "puma.json"));
+  CHECK(frames["links"].size() == 7);
+  CHECK(frames["dh"]["parallel_joints"] == nlohmann::json::parse("[[2, 3]]"));
+
+  // A calibrated model's nearly parallel joints 2 and 3: the table says what it costs, and with
+  // no tolerance it is exact.
+  r = runRobocal("simulate --model " + kModel +
+                 " --seed 3 --connections B1C1 --points-per-shell 1" + " --out " + (dir / "x.csv") +
+                 " --truth-out " + (dir / "truth.json"));
+  REQUIRE(r.exit_code == 0);
+  r = runRobocal("export --dh --model " + (dir / "truth.json") + " --out " + (dir / "t.csv"));
+  REQUIRE(r.exit_code == 0);
+  CHECK_THAT(r.output, Catch::Matchers::Contains("the table is not exact"));
+  r = runRobocal("export --dh --parallel-tolerance-deg 0 --model " + (dir / "truth.json") +
+                 " --out " + (dir / "t.csv"));
+  REQUIRE(r.exit_code == 0);
+  CHECK_THAT(r.output, Catch::Matchers::Contains("joints taken as parallel: none"));
+  CHECK(r.output.find("the table is not exact") == std::string::npos);
+
+  for (const std::string bad :
+       {"--dh --urdf", "--frames --name x", "--dh --parallel-tolerance-deg 95",
+        "--urdf --parallel-tolerance-deg 1", ""}) {
+    INFO(bad);
+    r = runRobocal("export " + bad + " --model " + kModel + " --out " + (dir / "bad.out"), false);
+    CHECK(r.exit_code == 2);
+    CHECK_FALSE(std::filesystem::exists(dir / "bad.out"));
+  }
 }
