@@ -5,6 +5,7 @@
 
 #include <robocal/compensation/targets.hpp>
 #include <robocal/formats/model_json.hpp>
+#include <robocal/formats/program.hpp>
 
 #include <cstdio>
 
@@ -14,6 +15,7 @@ namespace {
 constexpr const char* kHelp =
     R"(usage: robocal compensate --model CALIBRATED --targets FILE --out FILE
                           [--nominal NOMINAL] [--tool x,y,z,rz,ry,rx] [--format csv|val2|val2-move]
+       robocal compensate --model CALIBRATED --program FILE --dialect as|vplus|val2 --out FILE
 
 Corrected joint readings that put the real robot's tool at each target, computed with the
 calibrated model instead of the nominal one the controller uses. Frames (docs/compensation.md):
@@ -30,7 +32,12 @@ calibration measured), no_gain (a predicted error above the correction), outside
 unreachable; the last two carry no joints (docs/compensation.md).
 
   --model FILE          calibrated model (robocal solve --out, or robocald's)          required
-  --targets FILE        targets CSV                                                     required
+  --targets FILE        targets CSV                               required, or --program
+  --program FILE        a controller program file: the same program is written with each joint
+                        location (a .JOINTS / .LOCATIONS line, a #[...] / #PPOINT(...) literal)
+                        corrected and every other byte kept (docs/programs.md); a location that
+                        cannot be corrected is kept as it was and named; no pre-points
+  --dialect D           the program's language: as (Kawasaki AS), vplus (V+), val2 (VAL II)
   --out FILE            output to write                                                 required
   --nominal FILE        the controller's model: only a check, refused when it differs from the
                         nominal recorded in MODEL       [the recorded one, else the PUMA 560]
@@ -56,17 +63,54 @@ exit status: 0 every target ok, 1 an unreadable input, 2 a usage error,
 
 constexpr int kExitSomeNotOk = 3;
 
+// --program: the program rewritten with its locations corrected.
+int compensateProgram(const Args& args, const Compensator& compensator,
+                      const std::string& out_path) {
+  const std::string path = args.required("program");
+  const auto dialect = parseProgramDialect(args.required("dialect"));
+  if (!dialect) throw UsageError("--dialect: expected as, vplus or val2");
+  const ProgramFile program = parseProgram(readTextFile(path), *dialect, path);
+  std::vector<std::optional<JointsDeg>> corrected;
+  size_t not_ok = 0;
+  for (const ProgramLocation& loc : program.locations) {
+    const Target t{loc.name, std::nullopt, std::nullopt, loc.joints_deg, loc.line};
+    const CompensatedTarget r = compensateTarget(compensator, t);
+    corrected.push_back(r.hasJoints() ? std::optional<JointsDeg>(r.joints_deg) : std::nullopt);
+    if (!r.ok()) {
+      ++not_ok;
+      std::fprintf(stderr, "%s:%d: %s: %s: %s%s\n", path.c_str(), loc.line, loc.name.c_str(),
+                   compensationStatusName(r.status), r.reason.c_str(),
+                   r.hasJoints() ? " (corrected)" : " (kept as it was)");
+    }
+  }
+  for (const ProgramReference& u : program.undefined)
+    std::fprintf(stderr, "%s:%d: %s is used but not defined in the file: not corrected\n",
+                 path.c_str(), u.line, u.name.c_str());
+  writeTextFileAtomic(out_path, rewriteProgram(program, corrected));
+  std::printf("%s program %s: %zu joint locations, %zu ok, %zu not ok, %zu used but undefined\n",
+              programDialectName(*dialect), path.c_str(), program.locations.size(),
+              program.locations.size() - not_ok, not_ok, program.undefined.size());
+  std::printf("wrote %s (every line but the corrected locations as it was)\n", out_path.c_str());
+  return not_ok || !program.undefined.empty() ? kExitSomeNotOk : 0;
+}
+
 int run(const std::vector<std::string>& argv) {
   const Args args(argv,
                   {"model", "targets", "out", "nominal", "tool", "format", "approach-deg",
-                   "payload-kg", "payload-com"},
+                   "payload-kg", "payload-com", "program", "dialect"},
                   {"help"});
   if (args.flag("help")) {
     std::fputs(kHelp, stdout);
     return 0;
   }
+  if (args.has("program") == args.has("targets"))
+    throw UsageError("give --targets (a targets CSV) or --program (a program file), one of them");
+  if (args.has("program") && (args.has("format") || args.has("approach-deg")))
+    throw UsageError(
+        "--format and --approach-deg are for --targets: a program keeps its own "
+        "motion");
+  if (args.has("dialect") && !args.has("program")) throw UsageError("--dialect is for --program");
   Model calibrated = loadModelFile(args.required("model"));
-  const std::string targets_path = args.required("targets");
   const std::string out_path = args.required("out");
   const Model nominal = nominalFor(args, calibrated, "compensate", "model");
   applyPayloadArgs(args, calibrated);
@@ -76,6 +120,11 @@ int run(const std::vector<std::string>& argv) {
     if (!tool) throw UsageError("--tool: expected x,y,z,rz,ry,rx (mm, deg)");
     options.tool = *tool;
   }
+  if (args.has("program")) {
+    options.approach_deg = 0;  // no pre-points: the program's own moves decide
+    return compensateProgram(args, Compensator(nominal, calibrated, options), out_path);
+  }
+  const std::string targets_path = args.required("targets");
   options.approach_deg = approachDegArg(args);
   const auto format = parseOutputFormat(args.get("format", "csv"));
   if (!format) throw UsageError("--format: expected csv, val2 or val2-move");

@@ -24,8 +24,6 @@ constexpr double kConnectSlackMm = 0.1;
 // The connection check's smallest approach step (deg): a real arm's backlash is 0.005-0.02 deg
 // (docs/realism.md).
 constexpr double kCheckApproachDeg = 0.02;
-// The most a check's pre-point may change the bar, by the model (mm): a tenth of a soft limit.
-constexpr double kCheckPrePointMm = 0.1;
 
 // A data point of a shell, as the samples file identifies it.
 std::tuple<int, double, double> pointKey(int shell, double lat_deg, double lon_deg) {
@@ -308,18 +306,23 @@ void ShellRunner::verifyConnection(const ShellPlan& shell, JointsDeg& q) {
   // Every pose the check reads is reached up in every joint from a pre-point (kCheckApproachDeg),
   // so that each joint's backlash sits on the same side at every reading: a real arm's 0.01 deg
   // of it, taken from both sides, changed a correct bar's reading by 0.07 mm across the bar and
-  // failed the check. The bar is on: a pre-point is taken only inside the joint limits and where
-  // the model predicts the bar changes by at most kCheckPrePointMm (else the check reads that
-  // pose as it comes, and says so in the log).
+  // failed the check. The pre-point keeps the bar's length (one joint steps back further, as the
+  // planner's approach does: the plain step changed it by 0.3 mm at the main job's connect pose
+  // and was skipped). Where no joint can undo the step (every joint's step back shortens the bar,
+  // as at the top of a shell) the pre-point changes the bar: it is taken inside the joint limits
+  // and where the model predicts a change no larger than the check's own step (step_mm, which the
+  // check commands anyway), else the check reads that pose as it comes, and says so in the log.
   bool logged_skip = false;
+  const Model& model = centring_.model();
   const auto moveUpTo = [&](const JointsDeg& target) {
-    const JointsDeg pre = target.array() - kCheckApproachDeg;
+    const JointsDeg pre =
+        approachPrePoint(Kinematics(model), model.balls_mm[shell.connection.ball_index],
+                         model.chucks_mm[shell.connection.chuck_index], target, kCheckApproachDeg);
     bool inside = true;
-    for (int j = 0; j < kJointCount; ++j)
-      inside = inside && pre[j] >= centring_.model().joints[j].min_deg;
-    const double change_mm = barLengthMm(centring_.model(), shell.connection, pre) -
-                             barLengthMm(centring_.model(), shell.connection, target);
-    if (inside && std::abs(change_mm) <= kCheckPrePointMm) {
+    for (int j = 0; j < kJointCount; ++j) inside = inside && pre[j] >= model.joints[j].min_deg;
+    const double change_mm =
+        barLengthMm(model, shell.connection, pre) - barLengthMm(model, shell.connection, target);
+    if (inside && std::abs(change_mm) <= step_mm) {
       ctx_.move(pre, true);
     } else if (!logged_skip) {
       logged_skip = true;
@@ -336,7 +339,6 @@ void ShellRunner::verifyConnection(const ShellPlan& shell, JointsDeg& q) {
   JointsDeg commanded = q;
   moveUpTo(commanded);
   double before_mm = settledMeasurement().deflection_mm;
-  const Model& model = centring_.model();
   const Connection& c = shell.connection;
   std::vector<ProbeStep> steps;
   json record = json::array();

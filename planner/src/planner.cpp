@@ -393,26 +393,20 @@ bool ShellPlanner::planArc(const Connection& c, double radius, const ArmConfig& 
   return planArc(c, radius, config, mid, b, depth + 1, vias, worst, why);
 }
 
-bool ShellPlanner::planApproach(const Connection& c, double radius, const ArmConfig& config,
-                                const Node& a, const Node& b, std::vector<PlanStep>& vias,
-                                double& worst, std::string& why) const {
-  const double step_deg = cell_.motion.approach_deg;
-  if (step_deg <= 0) return planArc(c, radius, config, a, b, 0, vias, worst, why);
+JointsDeg approachPrePoint(const Kinematics& kin, const Eigen::Vector3d& ball,
+                           const Eigen::Vector3d& chuck, const JointsDeg& q, double step_deg) {
   // Every joint steps back by step_deg; one joint steps back further so that the ball stays on
   // the shell (the bar's length changes by g . dq, g its gradient in the joints): the step alone
   // moved the ball radially by up to 0.9 mm at 0.05 deg.
-  JointsDeg pre_q = b.q - JointsDeg::Constant(step_deg);
-  const Eigen::Vector3d& ball = model().balls_mm[c.ball_index];
-  const Eigen::Vector3d& chuck = model().chucks_mm[c.chuck_index];
-  const Kinematics& kin = ik_.kinematics();
-  const double at_b = kin.barLength(b.q, ball, chuck);
+  JointsDeg pre_q = q - JointsDeg::Constant(step_deg);
+  const double at_q = kin.barLength(q, ball, chuck);
   JointsDeg gradient;  // mm per deg
   for (int j = 0; j < kJointCount; ++j) {
-    JointsDeg q = b.q;
-    q[j] += 1e-3;
-    gradient[j] = (kin.barLength(q, ball, chuck) - at_b) / 1e-3;
+    JointsDeg moved = q;
+    moved[j] += 1e-3;
+    gradient[j] = (kin.barLength(moved, ball, chuck) - at_q) / 1e-3;
   }
-  const double change_mm = gradient.dot(pre_q - b.q);
+  const double change_mm = gradient.dot(pre_q - q);
   int best = -1;  // the joint whose further step back undoes the change best
   for (int j = 0; j < kJointCount; ++j)
     if (gradient[j] * change_mm > 0 &&
@@ -421,9 +415,19 @@ bool ShellPlanner::planApproach(const Connection& c, double radius, const ArmCon
   if (best >= 0) {
     pre_q[best] -= std::min(change_mm / gradient[best], 10 * step_deg);
     for (int newton = 0; newton < 3; ++newton)  // onto the shell exactly, as every other step
-      pre_q[best] -= (kin.barLength(pre_q, ball, chuck) - at_b) / gradient[best];
-    if (pre_q[best] > b.q[best] - step_deg) pre_q[best] = b.q[best] - step_deg;
+      pre_q[best] -= (kin.barLength(pre_q, ball, chuck) - at_q) / gradient[best];
+    if (pre_q[best] > q[best] - step_deg) pre_q[best] = q[best] - step_deg;
   }
+  return pre_q;
+}
+
+bool ShellPlanner::planApproach(const Connection& c, double radius, const ArmConfig& config,
+                                const Node& a, const Node& b, std::vector<PlanStep>& vias,
+                                double& worst, std::string& why) const {
+  const double step_deg = cell_.motion.approach_deg;
+  if (step_deg <= 0) return planArc(c, radius, config, a, b, 0, vias, worst, why);
+  const JointsDeg pre_q = approachPrePoint(ik_.kinematics(), model().balls_mm[c.ball_index],
+                                           model().chucks_mm[c.chuck_index], b.q, step_deg);
   const std::string problem = poseProblem(c, radius, pre_q, cell_.motion.via_tolerance_mm);
   if (!problem.empty()) {
     why = "its approach pre-point: " + problem;

@@ -4,8 +4,10 @@
 #include "cli_helpers.hpp"
 
 #include <robocal/formats/csv.hpp>
+#include <robocal/formats/program.hpp>
 
 #include <algorithm>
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -271,5 +273,70 @@ TEST_CASE(
                    " --payload-com 0,60");
     CHECK(r.exit_code == 2);
     CHECK_THAT(r.output, Contains("--payload-com: expected x,y,z in mm"));
+  }
+}
+
+TEST_CASE("[cli] robocal compensate --program writes the program with its locations corrected") {
+  TempDir dir;
+  REQUIRE(runRobocal("simulate --model " + kModel + " --seed 3 --points-per-shell 40 --out " +
+                     dir / "s.csv")
+              .exit_code == 0);
+  REQUIRE(runRobocal("solve --model " + kModel + " " + dir / "s.csv" + " --out " + dir / "cal.json")
+              .exit_code == 0);
+  const std::string samples = ROBOCAL_SOURCE_DIR "/tests/formats/programs/";
+  struct Case {
+    const char* file;
+    const char* dialect;
+    robocal::ProgramDialect parsed_as;
+    bool undefined;
+  };
+  for (const Case& c : {Case{"pick_place.as", "as", robocal::ProgramDialect::kAs, true},
+                        Case{"pick_place.v2", "vplus", robocal::ProgramDialect::kVplus, false},
+                        Case{"pick_place.pg", "val2", robocal::ProgramDialect::kVal2, false}}) {
+    INFO(c.file);
+    const std::string in = samples + c.file, out = dir / (std::string("out-") + c.file);
+    const RunResult r = runRobocal("compensate --model " + dir / "cal.json" + " --program " + in +
+                                   " --dialect " + c.dialect + " --out " + out);
+    INFO(r.output);
+    // The sample's #not_taught is used and never defined: named with its line, the rest written.
+    if (c.undefined) {
+      CHECK(r.exit_code == 3);
+      CHECK_THAT(r.output, Contains(in + ":11: #not_taught is used but not defined"));
+    }
+    REQUIRE(std::filesystem::exists(out));
+    // The same joints through the targets CSV: the program's locations are those corrections.
+    const robocal::ProgramFile before = robocal::parseProgram(readFile(in), c.parsed_as, in);
+    const robocal::ProgramFile after = robocal::parseProgram(readFile(out), c.parsed_as, out);
+    REQUIRE(after.locations.size() == before.locations.size());
+    std::string csv = "name,j1,j2,j3,j4,j5,j6\n";
+    for (const auto& loc : before.locations) {
+      csv += "x";
+      for (int j = 0; j < 6; ++j) csv += "," + std::to_string(loc.joints_deg[j]);
+      csv += "\n";
+    }
+    writeFile(dir / "targets.csv", csv);
+    runRobocal("compensate --model " + dir / "cal.json" + " --targets " + dir / "targets.csv" +
+               " --approach-deg 0 --out " + dir / "want.csv");
+    std::istringstream want(readFile(dir / "want.csv"));
+    std::string line;
+    std::getline(want, line);  // header
+    for (const auto& loc : after.locations) {
+      REQUIRE(std::getline(want, line));
+      const auto f = robocal::csv::splitFields(line);
+      if (f[1].empty()) continue;  // not corrected: kept as it was
+      for (int j = 0; j < 6; ++j)
+        CHECK(std::abs(loc.joints_deg[j] - *robocal::csv::number(f[j + 1])) < 1e-6);
+    }
+    CHECK(after.locations[0].joints_deg != before.locations[0].joints_deg);  // a real correction
+  }
+  // A program with targets, a dialect without a program, and an unknown dialect: usage errors.
+  for (const std::string bad :
+       {" --program " + samples + "pick_place.as --targets x.csv --dialect as",
+        std::string(" --targets x.csv --dialect as"),
+        " --program " + samples + "pick_place.as --dialect kuka",
+        " --program " + samples + "pick_place.as --dialect as --format val2"}) {
+    INFO(bad);
+    CHECK(runRobocal("compensate --model " + dir / "cal.json" + bad + " --out " + dir / "bad")
+              .exit_code == 2);
   }
 }

@@ -119,6 +119,25 @@ TEST_CASE("a bar confirmed but not attached pauses the run before any sample",
   CHECK(cell.sim->status("broken_events") == "0");
 }
 
+TEST_CASE("with a real arm's backlash the connection check passes a seated bar on every shell",
+          "[e2e][connection]") {
+  // cellsim's typical realism: 0.01 deg of backlash per joint, compliance, warm-up. Each pose the
+  // check reads is approached from below; at the connect pose (the shell's top) the plain step
+  // back changed the bar by 0.3 mm, was skipped, and the backlash taken from both sides failed a
+  // correct bar (the main job paused at its first shell).
+  Cell cell({"B1C1", "B2C2", "B3C3"}, 21, true, 60, 50, json::object(), {"--realism", "typical"});
+  auto c = cell.daemon->client();
+  c->send({{"cmd", "watch"}, {"enable", true}});
+  REQUIRE(c->request({{"cmd", "start"}, {"token", cell.daemon->token()}}, 30, "ACK")["class"] ==
+          "ACK");
+  const std::string state = cell.operate(*c, {"done", "paused", "error"}, 240);
+  const json st = c->request({{"cmd", "status"}}, 10, "STATUS");
+  INFO(st.dump());
+  REQUIRE(state == "done");
+  CHECK(countEvents(cell.runDir(st["run"]), "connection_check") == 3);
+  CHECK(countEvents(cell.runDir(st["run"]), "check_pre_point_skipped") == 0);
+}
+
 TEST_CASE("a bar in the wrong chuck or on a neighbouring ball that happens to fit pauses the run",
           "[e2e][connection]") {
   struct Case {

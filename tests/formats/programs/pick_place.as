@@ -1,0 +1,20 @@
+.PROGRAM pick_place() ; pick a part and place it (Kawasaki AS)
+  SPEED 50 ALWAYS
+  JMOVE #home
+  JMOVE #above_pick;over the part
+  LMOVE #pick
+  JMOVE #[10.5,-20.25,30,0,45,-90]
+  LMOVE datum
+  JMOVE #home
+.END
+.PROGRAM check() #9744
+  JMOVE #not_taught ; used, never defined
+.END
+.TRANS
+datum 495.507904 -83.463379 192.623932 -35.992920 112.299080 -179.965958
+.END
+.JOINTS
+#home 0.000000 30.000000 -150.000000 0.000000 -30.000000 0.000000
+#above_pick 10.000000 40.000000 -140.000000 5.000000 -40.000000 20.000000
+#pick 10.000000 45.000000 -135.000000 5.000000 -45.000000 20.000000 -2000.000000
+.END
