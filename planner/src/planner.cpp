@@ -453,10 +453,14 @@ void ShellPlanner::finishShell(ShellPlan& shell) const {
   JointsDeg prev = shell.connect.joints_deg;
   for (const PlanStep& step : shell.steps) {
     (step.kind == StepKind::kPoint ? s.points : s.vias)++;
-    s.duration_s += moveDuration(prev, step.joints_deg);
-    if (step.kind == StepKind::kPoint) s.duration_s += cell_.motion.settle_s;
+    s.duration_s += stepDuration(prev, step);
     prev = step.joints_deg;
   }
+}
+
+double ShellPlanner::stepDuration(const JointsDeg& from, const PlanStep& step) const {
+  return moveDuration(from, step.joints_deg) +
+         (step.kind == StepKind::kPoint ? cell_.motion.settle_s : 0.0);
 }
 
 ShellPlanner::PointTry ShellPlanner::tryPoint(const Connection& c, double radius, double lat_deg,
@@ -733,19 +737,23 @@ ShellPlan ShellPlanner::joinPoints(const Connection& c, double extension_mm, int
   const double reference_every_s = 60 * cell_.motion.reference_every_min;
   std::optional<size_t> reference;
   std::size_t reference_step = 0;  // index in shell.steps of its last measurement
+  // Planned time since then, summed up to steps[timed_to] (each step counted once).
+  double since_reference_s = 0;
+  std::size_t timed_to = 0;
   auto referenceDue = [&] {
-    if (!reference) return false;
-    double since_s = 0;
-    for (std::size_t i = reference_step + 1; i < shell.steps.size(); ++i) {
-      since_s += moveDuration(shell.steps[i - 1].joints_deg, shell.steps[i].joints_deg);
-      if (shell.steps[i].kind == StepKind::kPoint) since_s += cell_.motion.settle_s;
-    }
-    return since_s >= reference_every_s;
+    for (; timed_to + 1 < shell.steps.size(); ++timed_to)
+      since_reference_s +=
+          stepDuration(shell.steps[timed_to].joints_deg, shell.steps[timed_to + 1]);
+    return since_reference_s >= reference_every_s;
+  };
+  auto startReferenceClock = [&] {
+    reference_step = timed_to = shell.steps.size() - 1;
+    since_reference_s = 0;
   };
   auto measureReference = [&] {
     const std::size_t before = shell.steps.size();
     revisit(*reference);
-    if (shell.steps.size() > before) reference_step = shell.steps.size() - 1;
+    if (shell.steps.size() > before) startReferenceClock();
   };
   for (const auto& [n, is_revisit] : visits) {
     const ShellPoint& ch = chosen[n];
@@ -809,7 +817,7 @@ ShellPlan ShellPlanner::joinPoints(const Connection& c, double extension_mm, int
     visits_of[n] = 1;
     if (!reference && reference_every_s > 0) {
       reference = n;
-      reference_step = shell.steps.size() - 1;
+      startReferenceClock();
     }
   }
   if (reference && reference_step + 1 < shell.steps.size()) measureReference();  // the shell's end

@@ -8,7 +8,6 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
-#include <tuple>
 
 namespace robocal {
 namespace {
@@ -71,12 +70,9 @@ namespace {
 // mean: the bar's noise, whatever the model.
 void measureNoise(const std::vector<Sample>& samples, const Eigen::VectorXd& residuals,
                   Adequacy& a) {
-  std::map<std::tuple<int, int, int, double, double, double>, std::vector<double>> places;
-  for (size_t i = 0; i < samples.size(); ++i) {
-    const Sample& s = samples[i];
-    places[{s.shell, s.ball_index, s.chuck_index, s.extension_mm, s.lat_deg, s.lon_deg}].push_back(
-        residuals[static_cast<Eigen::Index>(i)]);
-  }
+  std::map<SamplePlace, std::vector<double>> places;
+  for (size_t i = 0; i < samples.size(); ++i)
+    places[placeOf(samples[i])].push_back(residuals[static_cast<Eigen::Index>(i)]);
   double squares = 0;
   for (const auto& [place, r] : places) {
     if (r.size() < 2) continue;

@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
-#include <tuple>
 #include <utility>
 
 namespace robocal {
@@ -15,14 +14,11 @@ Drift measureDrift(const std::vector<Sample>& samples, const Eigen::VectorXd& re
   Drift d;
   d.limit_mm = limit_mm;
   // (time in hours, residual) of each place.
-  std::map<std::tuple<int, int, int, double, double, double>,
-           std::vector<std::pair<double, double>>>
-      places;
+  std::map<SamplePlace, std::vector<std::pair<double, double>>> places;
   for (std::size_t i = 0; i < samples.size(); ++i) {
     const Sample& s = samples[i];
     if (!s.time_s) continue;
-    places[{s.shell, s.ball_index, s.chuck_index, s.extension_mm, s.lat_deg, s.lon_deg}].push_back(
-        {*s.time_s / 3600, residuals[static_cast<Eigen::Index>(i)]});
+    places[placeOf(s)].push_back({*s.time_s / 3600, residuals[static_cast<Eigen::Index>(i)]});
   }
   // Sums about each place's means: a slope common to all places, an offset for each.
   double stt = 0, str = 0, srr = 0;

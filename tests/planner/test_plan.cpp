@@ -416,6 +416,23 @@ TEST_CASE("with approach_deg every point is approached from below in every joint
   CHECK(pointsNotApproachedFromBelow(plain) > plain.summary.points / 4);
 }
 
+namespace {
+
+// A plan of `shell` alone: check-plan accepts it, and its steps' visit counts survive the file.
+Plan checkedAndKeptInFile(const CellConfig& cell, const ShellPlan& shell) {
+  Plan plan;
+  plan.cell = cell;
+  plan.shells = {shell};
+  CHECK(checkPlan(nominal(), cell, plan).empty());
+  const Plan back = parsePlan(formatPlan(plan), "p.json");
+  REQUIRE(back.shells[0].steps.size() == shell.steps.size());
+  for (size_t i = 0; i < shell.steps.size(); ++i)
+    CHECK(back.shells[0].steps[i].visit == shell.steps[i].visit);
+  return plan;
+}
+
+}  // namespace
+
 TEST_CASE("with revisit_every a few points are measured again, reached the same way, and kept") {
   CellConfig cell = defaultCell();
   cell.motion.approach_deg = 0.02;
@@ -443,15 +460,8 @@ TEST_CASE("with revisit_every a few points are measured again, reached the same 
   }
   CHECK(revisits == firsts / 20);
   CHECK(pointsNotApproachedFromBelow(shell) == 0);  // the revisits too
-  Plan plan;
-  plan.cell = cell;
-  plan.shells = {shell};
-  CHECK(checkPlan(nominal(), cell, plan).empty());
   // The visit survives the file and a re-plan of the rest; a plan file's bad visit is refused.
-  const Plan back = parsePlan(formatPlan(plan), "p.json");
-  REQUIRE(back.shells[0].steps.size() == shell.steps.size());
-  for (size_t i = 0; i < shell.steps.size(); ++i)
-    CHECK(back.shells[0].steps[i].visit == shell.steps[i].visit);
+  const Plan plan = checkedAndKeptInFile(cell, shell);
   const ShellPlan rest =
       ShellPlanner(nominal(), cell).replanRemaining(shell, 1, shell.connect.joints_deg);
   int replanned_revisits = 0;
@@ -509,15 +519,8 @@ TEST_CASE("with reference_every_min the shell's first point is measured again ev
   }
   CHECK(isReference(shell.steps.back()));
   CHECK(pointsNotApproachedFromBelow(shell) == 0);
-  Plan plan;
-  plan.cell = cell;
-  plan.shells = {shell};
-  CHECK(checkPlan(nominal(), cell, plan).empty());
   // The counts survive the plan file and a re-plan of the rest (a resume).
-  const Plan back = parsePlan(formatPlan(plan), "p.json");
-  REQUIRE(back.shells[0].steps.size() == shell.steps.size());
-  for (size_t i = 0; i < shell.steps.size(); ++i)
-    CHECK(back.shells[0].steps[i].visit == shell.steps[i].visit);
+  checkedAndKeptInFile(cell, shell);
   CHECK(parseCell(cellToJson(cell).dump(), "c.json").motion.reference_every_min == 2);
   const ShellPlan rest = planner.replanRemaining(shell, 1, shell.connect.joints_deg);
   CHECK(std::count_if(rest.steps.begin(), rest.steps.end(), isReference) == expected_visit);

@@ -230,6 +230,8 @@ class ShellPlanner {
                     const Node& b, std::vector<PlanStep>& vias, double& worst,
                     std::string& why) const;
   void finishShell(ShellPlan& shell) const;
+  // The planned time of `step` reached from `from`: its move, and the settle at a point.
+  double stepDuration(const JointsDeg& from, const PlanStep& step) const;
   Node nodeFor(const Connection& c, double radius, double lat_deg, double lon_deg,
                const Eigen::Isometry3d& pose, const JointsDeg& q) const;
 

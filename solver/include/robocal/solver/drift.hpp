@@ -12,9 +12,18 @@
 
 #include <Eigen/Core>
 #include <string>
+#include <tuple>
 #include <vector>
 
 namespace robocal {
+
+// Where a sample was measured: its shell, connection, extension and place on the shell. Samples
+// of one place measure the same distance (the plan's revisits and reference pose); the adequacy
+// test's pure error and the drift both group by it.
+using SamplePlace = std::tuple<int, int, int, double, double, double>;
+inline SamplePlace placeOf(const Sample& s) {
+  return {s.shell, s.ball_index, s.chuck_index, s.extension_mm, s.lat_deg, s.lon_deg};
+}
 
 // A change over a place's span below this is not worth a flag: a tenth of what the compensated
 // arm misses by (docs/accuracy.md), and below the LVDT's own nonlinearity.
