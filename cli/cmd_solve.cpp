@@ -4,9 +4,8 @@
 #include "args.hpp"
 #include "model_args.hpp"
 
-#include <robocal/compensation/accuracy_report.hpp>
+#include <robocal/calibration/fit_pipeline.hpp>
 #include <robocal/formats/model_json.hpp>
-#include <robocal/formats/report.hpp>
 #include <robocal/formats/samples_csv.hpp>
 #include <robocal/planner/cell_json.hpp>
 #include <robocal/solver/assessment.hpp>
@@ -198,20 +197,23 @@ int run(const std::vector<std::string>& argv) {
 
   const CellConfig cell = args.has("cell") ? loadCellFile(args.get("cell", "")) : CellConfig{};
 
-  const FitAssessment fit = assessFit(nominal, std::move(samples), options);
-  const Model calibrated = calibratedModel(fit, origin);
+  FitOutcome outcome =
+      fitCalibration(nominal, std::move(samples), options, origin, cell.work_volume);
+  const FitAssessment& fit = outcome.fit;
+  const Model& calibrated = outcome.calibrated;
   const bool refuse = !fit.problems.empty() && !args.flag("allow-partial");
-  if (args.has("out") && !refuse) saveModelFile(args.get("out", ""), calibrated);
-  if (args.has("report")) writeReport(args.get("report", ""), fit, calibrated);
-  // Where the user works: the predicted error over the work volume (robocald's RESULT has the
-  // same, from the same code).
-  nlohmann::ordered_json summary = fitSummaryJson(fit);
-  // And beyond it, over the arm's whole range: what the calibration does not cover.
-  const PredictedAccuracy accuracy =
-      predictedAccuracy(nominal, calibrated, cell.work_volume, args.get("report", ""));
-  summary["work_volume"] = accuracy.work_volume;
-  summary["whole_range"] = accuracy.whole_range;
-  const std::string& work_text = accuracy.text;
+  if (args.has("out") && !refuse) {
+    saveModelFile(args.get("out", ""), calibrated);
+    outcome.verdict.model_file =
+        std::filesystem::absolute(args.get("out", "")).lexically_normal().string();
+  }
+  nextStepOffline(outcome.verdict,
+                  std::filesystem::absolute(args.required("model")).lexically_normal().string(),
+                  origin.samples_files);
+  if (args.has("report")) writeFitReport(outcome, args.get("report", ""));
+  // Where the user works and beyond it (robocald's RESULT has the same, from the same code).
+  const nlohmann::ordered_json summary = fitResultJson(outcome);
+  const std::string& work_text = outcome.accuracy.text;
 
   if (args.flag("json")) {
     std::printf("%s\n", summary.dump().c_str());
@@ -221,6 +223,7 @@ int run(const std::vector<std::string>& argv) {
     if (args.has("out") && !refuse) std::printf("wrote %s\n", args.get("out", "").c_str());
     if (args.has("report"))
       std::printf("report in %s (summary.html)\n", args.get("report", "").c_str());
+    std::printf("\n%s", resultVerdictText(outcome.verdict).c_str());
   }
   std::fflush(stdout);
   if (fit.problems.empty()) return 0;

@@ -1,5 +1,7 @@
 #include "daemon_view.hpp"
 
+#include <robocal/formats/result_verdict.hpp>
+
 #include <algorithm>
 #include <cstdio>
 #include <sstream>
@@ -177,13 +179,17 @@ std::string resultText(const proto::Result& result) {
     for (const json& shell : r["worst_shells"]) out << " " << shell.dump();
     out << " (robocal solve prints the table)\n";
   }
-  if (r.contains("problems"))
-    for (const json& p : r["problems"])
-      out << "  NOT USABLE AS IS: " << (p.is_string() ? p.get<std::string>() : p.dump()) << "\n";
   if (r.contains("outliers") && !r["outliers"].empty())
     out << "  outliers: " << r["outliers"].size() << "\n";
-  out << "  calibrated model: " << result.calibrated_file << "\n";
-  out << "  report: " << result.report_dir << "\n";
+  out << "  report: " << result.report_dir << "/summary.html\n";
+  if (r.contains("verdict")) {
+    out << resultVerdictText(resultVerdictFromJson(r["verdict"]));
+  } else {  // a daemon from before the verdict object
+    if (r.contains("problems"))
+      for (const json& p : r["problems"])
+        out << "  NOT USABLE AS IS: " << (p.is_string() ? p.get<std::string>() : p.dump()) << "\n";
+    out << "  calibrated model: " << result.calibrated_file << "\n";
+  }
   return out.str();
 }
 

@@ -76,12 +76,7 @@ echo "== where the user works: the true robot commanded with nominal and with co
   --cell "$cell" --svg "$out/accuracy.svg"
 echo
 echo "== the verdict (robocald's last fit, as RESULT and the console give it)"
-jq -r '
-  def mm(x): if x == null then "not computed" else "\((x * 1000 | round) / 1000) mm RMS" end;
-  if (.problems | length) == 0 then "usable: yes, no problem found (rank \(.rank) of \(.expected_rank))"
-  else "usable: NO\n" + (.problems | map("  - " + .) | join("\n")) end,
-  "predicted position error: in the work volume \(mm(.work_volume.predicted_position_error_mm.rms)), over the arm'"'"'s whole range \(mm(.whole_range.predicted_position_error_mm.rms))",
-  "model: \(.calibrated_file) (robocald'"'"'s model version \(.model_version // "-"))"' "$out/result.json"
+"$bin" result --port "$port"
 echo
 echo "Done. Run folder: $run_dir; calibrated model: $out/calibrated.json; report: $out/report/"
 echo "Corrected joint targets from it: $bin compensate --model $out/calibrated.json --targets FILE --out FILE"

@@ -246,27 +246,30 @@ AccuracyReport predictedWholeRangeAccuracy(const Compensator& compensator) {
 }
 
 PredictedAccuracy predictedAccuracy(const Model& nominal, const Model& calibrated,
-                                    const WorkVolume& work, const std::string& report_dir) {
+                                    const WorkVolume& work) {
   PredictedAccuracy out;
   try {
     const Compensator compensator(nominal, calibrated);
     try {
-      const AccuracyReport volume =
+      AccuracyReport volume =
           predictedWorkVolumeAccuracy(compensator, work, "the cell's work_volume");
       out.work_volume = accuracyJson(volume);
       out.text = accuracyText(volume);
       out.work_volume_rms_mm = volume.predicted_position_mm.rms;
-      if (!report_dir.empty()) writeWorkVolumeReport(report_dir, volume);
-    } catch (const std::exception& e) {  // the volume is out of reach, the report unwritable
+      out.work_volume_report = std::move(volume);
+    } catch (const std::exception& e) {  // the volume is out of reach
       out.work_volume = {{"error", e.what()}};
       out.text = std::string("work-volume accuracy: ") + e.what() + "\n";
+      out.problem = std::string("work volume: ") + e.what();
     }
     const AccuracyReport whole = predictedWholeRangeAccuracy(compensator);
     out.whole_range = accuracyJson(whole);
     out.text += accuracyText(whole);
+    out.whole_range_rms_mm = whole.predicted_position_mm.rms;
   } catch (const std::exception& e) {  // a model compensation cannot use
     out.work_volume = out.whole_range = {{"error", e.what()}};
     out.text = std::string("accuracy: ") + e.what() + "\n";
+    out.problem = e.what();
   }
   return out;
 }

@@ -1,11 +1,9 @@
 #include "fit_job.hpp"
 
-#include <robocal/compensation/accuracy_report.hpp>
+#include <robocal/calibration/fit_pipeline.hpp>
 #include <robocal/formats/health_report.hpp>
 #include <robocal/formats/model_json.hpp>
-#include <robocal/formats/report.hpp>
 #include <robocal/formats/samples_csv.hpp>
-#include <robocal/solver/assessment.hpp>
 
 #include <spdlog/spdlog.h>
 
@@ -52,73 +50,72 @@ void FitJob::launch(RunDir dir, std::vector<Sample> samples, double set_extensio
                  samples.size());
     fitted = std::move(samples);
   }
-  running_ =
-      std::async(std::launch::async, [this, dir, fitted = std::move(fitted), set_extension_mm,
-                                      set_index, previous, previous_set, approach_deg]() mutable {
-        try {
-          AssessOptions options;  // robocal solve's defaults
-          if (previous) {
-            HeldOutSamples held{{},
-                                previous,
-                                "set " + std::to_string(set_index) + " predicted by the set-" +
-                                    std::to_string(previous_set) + " fit"};
-            for (const Sample& s : fitted)
-              if (std::abs(s.extension_mm - set_extension_mm) < 1e-6) held.samples.push_back(s);
-            if (!held.samples.empty()) options.validation = std::move(held);
-          }
-          const FitAssessment fit = assessFit(nominal_, std::move(fitted), options);
-          const std::string name = "set" + std::to_string(set_index);
-          const std::string model_file = dir.file("calibrated-" + name + ".json");
-          const Model calibrated =
-              calibratedModel(fit, {dir.id(), {dir.file("samples.csv")}, approach_deg});
-          saveModelFile(model_file, calibrated);
-          writeReport(dir.file("report-" + name), fit, calibrated);
-          json result = fitSummaryJson(fit);
-          proto::ModelEntry entry;
-          // Where the user works and beyond; a fit is still a fit without them.
-          const PredictedAccuracy accuracy =
-              predictedAccuracy(nominal_, calibrated, work_volume_, dir.file("report-" + name));
-          result["work_volume"] = accuracy.work_volume;
-          result["whole_range"] = accuracy.whole_range;
-          entry.work_volume_error_mm = accuracy.work_volume_rms_mm;
-          if (!accuracy.work_volume_rms_mm)
-            spdlog::warn("set {}: no work-volume accuracy: {}", set_index, accuracy.text);
-          entry.date_utc = calibrated.provenance ? calibrated.provenance->date_utc : "";
-          entry.run = dir.id();
-          entry.set = set_index;
-          entry.samples = static_cast<int>(fit.samples.size());
-          entry.fit_rms_mm = fit.fit.after.rms_mm;
-          entry.rank = fit.fit.identifiability.rank;
-          entry.usable = fit.problems.empty();
-          entry.problems = fit.problems;
-          const int version = models_.add(calibrated, entry);
-          result["model_version"] = version;
-          result["run"] = dir.id();
-          result["set"] = set_index;
-          result["extension_mm"] = set_extension_mm;
-          result["calibrated_file"] = model_file;
-          result["report_dir"] = dir.file("report-" + name);
-          result["samples_file"] = dir.file("samples.csv");
-          if (fit.validation)  // kept for clients of protocol 1.0; validation_* say the same
-            result["prediction"] = {{"n", fit.validation->stats.count},
-                                    {"rms_mm", fit.validation->stats.rms_mm},
-                                    {"max_abs_mm", fit.validation->stats.max_abs_mm}};
-          dir.writeJson("result-" + name + ".json", result);
-          dir.logEvent({{"event", "result"},
-                        {"set", set_index},
-                        {"model_version", version},
-                        {"rms_mm", fit.fit.after.rms_mm},
-                        {"problems", fit.problems}});
-          for (const std::string& problem : fit.problems)
-            spdlog::warn("set {} fit not usable as a calibration: {}", set_index, problem);
-          shared_.with([&](RunData& d) { d.last_result = result; });
-          publish_(result, false);
-        } catch (const std::exception& e) {
-          spdlog::error("solver failed: {}", e.what());
-          publish_(proto::toJson(proto::Error{std::string("solver failed: ") + e.what(), {}, {}}),
-                   false);
-        }
-      });
+  running_ = std::async(std::launch::async, [this, dir, fitted = std::move(fitted),
+                                             set_extension_mm, set_index, previous, previous_set,
+                                             approach_deg]() mutable {
+    try {
+      AssessOptions options;  // robocal solve's defaults
+      if (previous) {
+        HeldOutSamples held{{},
+                            previous,
+                            "set " + std::to_string(set_index) + " predicted by the set-" +
+                                std::to_string(previous_set) + " fit"};
+        for (const Sample& s : fitted)
+          if (std::abs(s.extension_mm - set_extension_mm) < 1e-6) held.samples.push_back(s);
+        if (!held.samples.empty()) options.validation = std::move(held);
+      }
+      FitOutcome outcome =
+          fitCalibration(nominal_, std::move(fitted), options,
+                         {dir.id(), {dir.file("samples.csv")}, approach_deg}, work_volume_);
+      const FitAssessment& fit = outcome.fit;
+      const std::string name = "set" + std::to_string(set_index);
+      const std::string model_file = dir.file("calibrated-" + name + ".json");
+      saveModelFile(model_file, outcome.calibrated);
+      proto::ModelEntry entry;
+      // Where the user works and beyond; a fit is still a fit without them.
+      entry.work_volume_error_mm = outcome.accuracy.work_volume_rms_mm;
+      if (!outcome.accuracy.work_volume_rms_mm)
+        spdlog::warn("set {}: no work-volume accuracy: {}", set_index, outcome.accuracy.text);
+      entry.date_utc = outcome.calibrated.provenance ? outcome.calibrated.provenance->date_utc : "";
+      entry.run = dir.id();
+      entry.set = set_index;
+      entry.samples = static_cast<int>(fit.samples.size());
+      entry.fit_rms_mm = fit.fit.after.rms_mm;
+      entry.rank = fit.fit.identifiability.rank;
+      entry.usable = fit.problems.empty();
+      entry.problems = fit.problems;
+      const int version = models_.add(outcome.calibrated, entry);
+      outcome.verdict.model_file = model_file;
+      nextStepDaemon(outcome.verdict, version);
+      writeFitReport(outcome, dir.file("report-" + name));
+      json result = fitResultJson(outcome);
+      result["model_version"] = version;
+      result["run"] = dir.id();
+      result["set"] = set_index;
+      result["extension_mm"] = set_extension_mm;
+      result["calibrated_file"] = model_file;
+      result["report_dir"] = dir.file("report-" + name);
+      result["samples_file"] = dir.file("samples.csv");
+      if (fit.validation)  // kept for clients of protocol 1.0; validation_* say the same
+        result["prediction"] = {{"n", fit.validation->stats.count},
+                                {"rms_mm", fit.validation->stats.rms_mm},
+                                {"max_abs_mm", fit.validation->stats.max_abs_mm}};
+      dir.writeJson("result-" + name + ".json", result);
+      dir.logEvent({{"event", "result"},
+                    {"set", set_index},
+                    {"model_version", version},
+                    {"rms_mm", fit.fit.after.rms_mm},
+                    {"problems", fit.problems}});
+      for (const std::string& problem : fit.problems)
+        spdlog::warn("set {} fit not usable as a calibration: {}", set_index, problem);
+      shared_.with([&](RunData& d) { d.last_result = result; });
+      publish_(result, false);
+    } catch (const std::exception& e) {
+      spdlog::error("solver failed: {}", e.what());
+      publish_(proto::toJson(proto::Error{std::string("solver failed: ") + e.what(), {}, {}}),
+               false);
+    }
+  });
 }
 
 void FitJob::launchCheck(RunDir dir, std::vector<Sample> samples) {

@@ -416,7 +416,17 @@ nlohmann::ordered_json fitSummaryJson(const FitAssessment& a) {
   return out;
 }
 
-void writeReport(const std::string& dir, const FitAssessment& a, const Model& calibrated) {
+ResultVerdict fitOnlyVerdict(const FitAssessment& a) {
+  ResultVerdict v;
+  v.usable = a.problems.empty();
+  v.problems = a.problems;
+  v.rank = a.fit.identifiability.rank;
+  v.expected_rank = a.fit.identifiability.expected;
+  return v;
+}
+
+void writeReport(const std::string& dir, const FitAssessment& a, const Model& calibrated,
+                 const ReportExtras& extras) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) throw FormatError(dir + ": cannot create the report folder: " + ec.message());
@@ -447,7 +457,11 @@ void writeReport(const std::string& dir, const FitAssessment& a, const Model& ca
     add("validation_shell_rms", "Residual per shell, " + v.description,
         [&](const std::string& t, std::string* s) { return shellFigure(v.shells, t, s); });
   }
-  writeTextFileAtomic(dir + "/summary.html", report_detail::summaryHtml(a, calibrated, figures));
+  figures.insert(figures.end(), extras.figures.begin(), extras.figures.end());
+  const ResultVerdict verdict = extras.verdict ? *extras.verdict : fitOnlyVerdict(a);
+  report["verdict"] = resultVerdictJson(verdict);
+  writeTextFileAtomic(dir + "/summary.html",
+                      report_detail::summaryHtml(a, calibrated, verdict, figures));
   writeTextFileAtomic(dir + "/report.json", report.dump(1) + "\n");
 }
 

@@ -1,6 +1,8 @@
 // Inside formats: the pieces report.cpp and summary_html.cpp share. Not installed.
 #pragma once
 
+#include <robocal/formats/report.hpp>
+#include <robocal/formats/result_verdict.hpp>
 #include <robocal/solver/assessment.hpp>
 
 #include <nlohmann/json.hpp>
@@ -19,16 +21,11 @@ std::string fmt(const char* format, double a, double b = 0, double c = 0, double
 // mean_mm, rms_to_median, stands_out (the fit's report and the health check's verdict).
 nlohmann::ordered_json shellsJson(const ShellTable& table);
 
-// A figure the report wrote: its file name in the report folder, a caption, and its SVG text.
-struct Figure {
-  std::string file;
-  std::string caption;
-  std::string svg;
-};
+using Figure = ReportFigure;
 
-// The one-page summary: the model's name and provenance, the problems, the headline numbers, the
+// The one-page summary: the model's name and provenance, the verdict, the headline numbers, the
 // per-shell and parameter tables, and the figures inline (each linked to its file).
 std::string summaryHtml(const FitAssessment& fit, const Model& calibrated,
-                        const std::vector<Figure>& figures);
+                        const ResultVerdict& verdict, const std::vector<Figure>& figures);
 
 }  // namespace robocal::report_detail

@@ -15,6 +15,8 @@ h2 { font-size: 17px; margin-top: 28px; border-bottom: 1px solid #ccc; }
 .verdict { padding: 10px 14px; border-radius: 4px; margin: 14px 0; }
 .ok { background: #e5f5e0; border: 1px solid #74c476; }
 .bad { background: #fee0d2; border: 1px solid #de2d26; }
+.verdict p { margin: 6px 0 0; }
+.verdict code { font-size: 13px; background: #fff8; padding: 1px 4px; }
 p { font-size: 14px; }
 table { border-collapse: collapse; font-size: 13px; }
 td, th { padding: 3px 10px; border-bottom: 1px solid #e5e5e5; text-align: right; }
@@ -82,7 +84,7 @@ std::string parameterTableHtml(const std::vector<ParameterRow>& rows) {
 }  // namespace
 
 std::string summaryHtml(const FitAssessment& a, const Model& calibrated,
-                        const std::vector<Figure>& figures) {
+                        const ResultVerdict& verdict, const std::vector<Figure>& figures) {
   const SolveResult& fit = a.fit;
   std::string h = "<!DOCTYPE html>\n<html lang='en'><head><meta charset='utf-8'>\n<title>" +
                   e(calibrated.name) + "</title>\n<style>" + kStyle + "</style></head><body>\n";
@@ -95,16 +97,7 @@ std::string summaryHtml(const FitAssessment& a, const Model& calibrated,
   }
   h += "<p class='sub'>" + e(sub) + "</p>\n";
 
-  if (a.problems.empty()) {
-    h += "<div class='verdict ok'>Usable as a calibration: rank " +
-         std::to_string(fit.identifiability.rank) + " of " +
-         std::to_string(fit.identifiability.expected) +
-         ", predicted ball-position error below the nominal model's.</div>\n";
-  } else {
-    h += "<div class='verdict bad'><b>Not usable as a calibration:</b><ul>";
-    for (const std::string& p : a.problems) h += "<li>" + e(p) + "</li>";
-    h += "</ul></div>\n";
-  }
+  h += resultVerdictHtml(verdict);
   std::string standing_out;
   for (const ShellResiduals& s : a.shells.shells)
     if (s.stands_out)

@@ -330,7 +330,7 @@ TEST_CASE("[cli] robocal compensate --program writes the program with its locati
     CHECK(after.locations[0].joints_deg != before.locations[0].joints_deg);  // a real correction
   }
   // A program with targets, a dialect without a program, and an unknown dialect: usage errors.
-  for (const std::string bad :
+  for (const std::string& bad :
        {" --program " + samples + "pick_place.as --targets x.csv --dialect as",
         std::string(" --targets x.csv --dialect as"),
         " --program " + samples + "pick_place.as --dialect kuka",

@@ -3,6 +3,7 @@
 #include "cli_helpers.hpp"
 
 #include <robocal/formats/model_json.hpp>
+#include <robocal/formats/result_verdict.hpp>
 #include <robocal/formats/samples_csv.hpp>
 
 #include <filesystem>
@@ -53,8 +54,9 @@ TEST_CASE("robocal solve --json fits, validates and writes a model others can re
 TEST_CASE("robocal solve --report writes the figures and report.json") {
   TempDir dir;
   simulate(dir);
-  const auto r = runRobocal("solve --model " + kModel + " " + (dir / "s.csv") + " --validate " +
-                            (dir / "v.csv") + " --report " + (dir / "rep"));
+  const auto r =
+      runRobocal("solve --model " + kModel + " " + (dir / "s.csv") + " --validate " +
+                 (dir / "v.csv") + " --report " + (dir / "rep") + " --out " + (dir / "cal.json"));
   INFO(r.output);
   REQUIRE(r.exit_code == 0);
   CHECK_THAT(r.output, Contains("rank: 36 of 54"));
@@ -76,15 +78,31 @@ TEST_CASE("robocal solve --report writes the figures and report.json") {
   CHECK(fig["shell_rms"]["shells"].size() == 9);
   // One page with the numbers, the tables and the figures, nothing fetched from elsewhere.
   const std::string html = readTextFile(dir / "rep/summary.html");
-  CHECK_THAT(html, Contains("<!DOCTYPE html>") && Contains("Usable as a calibration") &&
-                       Contains("<td class='l'>L0.x</td>") && Contains("B3C3 +150 mm") &&
-                       Contains("href='shell_rms.svg'") && Contains("<svg"));
+  CHECK_THAT(html, Contains("<!DOCTYPE html>") && Contains("<td class='l'>L0.x</td>") &&
+                       Contains("B3C3 +150 mm") && Contains("href='shell_rms.svg'") &&
+                       Contains("<svg"));
+  // One verdict: the page's box, the terminal's last block and report.json's object are one
+  // rendering each of the same verdict, with the accuracy, the model written and the next step.
+  const ResultVerdict verdict = resultVerdictFromJson(report["verdict"]);
+  CHECK(verdict.usable);
+  CHECK(verdict.rank == 36);
+  REQUIRE(verdict.work_volume_rms_mm);
+  REQUIRE(verdict.whole_range_rms_mm);
+  CHECK(*verdict.work_volume_rms_mm < *verdict.whole_range_rms_mm);
+  CHECK(std::filesystem::equivalent(verdict.model_file, dir / "cal.json"));
+  CHECK_THAT(verdict.next_command,
+             Contains("robocal compensate --model ") && Contains("cal.json --targets"));
+  CHECK_THAT(html, Contains(resultVerdictHtml(verdict)));
+  CHECK_THAT(r.output, Contains(resultVerdictText(verdict)));
+  // The work-volume map is written, shown and linked.
+  CHECK_THAT(readTextFile(dir / "rep/work_volume.svg"), Contains("</svg>"));
+  CHECK_THAT(html, Contains("href='work_volume.svg'"));
   auto count = [&](const std::string& what) {
     size_t n = 0;
     for (size_t at = html.find(what); at != std::string::npos; at = html.find(what, at + 1)) ++n;
     return n;
   };
-  CHECK(count("http") == count("xmlns='http://www.w3.org/2000/svg'"));  // no external assets
+  CHECK(count("http") == count("http://www.w3.org/2000/svg"));  // no external assets
   CHECK(html.find("src=") == std::string::npos);
 }
 
@@ -218,6 +236,11 @@ TEST_CASE("robocal solve refuses to write a model from data that cannot calibrat
     CHECK(r.exit_code == 3);
     CHECK_THAT(r.output, Contains("refused") && Contains("rank 5 of the 36") &&
                              Contains("no model written") && Contains("--allow-partial"));
+    // The verdict's block says the same, and what to do next.
+    CHECK_THAT(r.output, Contains("verdict: NOT USABLE as a calibration (rank 5 of 36):") &&
+                             Contains("model: none written") &&
+                             Contains("next: robocal solve --model ") &&
+                             Contains("Put right what the first problem says"));
     CHECK_FALSE(std::filesystem::exists(dir / "cal.json"));
   }
   SECTION("2 shells") {

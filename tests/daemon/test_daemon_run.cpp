@@ -10,6 +10,7 @@
 #include <robocal/compensation/accuracy.hpp>
 #include <robocal/compensation/compensate.hpp>
 #include <robocal/formats/model_json.hpp>
+#include <robocal/formats/result_verdict.hpp>
 #include <robocal/formats/samples_csv.hpp>
 #include <robocal/kinematics/kinematics.hpp>
 #include <robocal/planner/plan_json.hpp>
@@ -71,9 +72,26 @@ TEST_CASE("a full run to RESULT recovers the true robot", "[e2e]") {
   REQUIRE(solved.exit_code == 0);
   json without_run_keys = result;
   for (const char* key : {"run", "set", "extension_mm", "calibrated_file", "report_dir",
-                          "samples_file", "model_version"})
+                          "samples_file", "model_version", "verdict"})
     without_run_keys.erase(key);
-  CHECK(json::parse(solved.output) == without_run_keys);
+  json offline = json::parse(solved.output);
+  const ResultVerdict offline_verdict = resultVerdictFromJson(offline["verdict"]);
+  offline.erase("verdict");
+  CHECK(offline == without_run_keys);
+  // The same verdict, but for where the model went: robocald stored it as a version.
+  const ResultVerdict verdict = resultVerdictFromJson(result["verdict"]);
+  CHECK(verdict.usable);
+  CHECK(verdict.problems == offline_verdict.problems);
+  CHECK(verdict.work_volume_rms_mm == offline_verdict.work_volume_rms_mm);
+  CHECK(verdict.whole_range_rms_mm == offline_verdict.whole_range_rms_mm);
+  CHECK(verdict.model_file == result["calibrated_file"].get<std::string>());
+  CHECK(verdict.next_command ==
+        "robocal activate " + std::to_string(result["model_version"].get<int>()));
+  // The page in the run folder carries it, and `robocal result` prints it.
+  CHECK_THAT(readTextFile(result["report_dir"].get<std::string>() + "/summary.html"),
+             Contains(resultVerdictHtml(verdict)));
+  const auto printed = runRobocal("result --port " + std::to_string(cell.daemon->port()));
+  CHECK_THAT(printed.output, Contains(resultVerdictText(verdict)));
   CHECK(result["parameter_table"].size() == 54);
   CHECK(result["shells"].size() == 6);
   // The run folder has the fit's one-page summary, and the model says where it came from.

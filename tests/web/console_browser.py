@@ -2,6 +2,8 @@
 """The console page in headless Chromium against a running robocald + robocal-cellsim
 (console_test.sh starts them and a run). Each check prints a line; the first failure exits 1."""
 import argparse
+import html
+import json
 import subprocess
 import sys
 import time
@@ -193,6 +195,38 @@ def run(driver, a, base, token):
     check(True, "the run history lists the aborted run")
     check(not driver.find_element(By.ID, "abort").is_enabled(), "Abort is disabled: nothing to end")
     shots(driver, a.screenshot, "ended")
+
+    # A run to its end, the simulated operator at the bar: the fit's verdict on the result card
+    # is RESULT's, word for word as `robocal result` and the run's summary.html give it. Two
+    # shells of 8 points cannot calibrate: the card must say NOT USABLE, why, and what next.
+    watcher = subprocess.Popen([a.robocal, "watch", "--port", str(a.tcp_port), "--operator-cellsim",
+                                a.cellsim, "--until", "done,paused,aborted,error", "--timeout-s",
+                                "200"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    time.sleep(0.5)  # watching before the run starts: no prompt is missed
+    started = subprocess.run([a.robocal, "start", "--port", str(a.tcp_port)], capture_output=True,
+                             text=True, timeout=60)
+    check(started.returncode == 0, "a second run starts: " + started.stdout.strip())
+    watched = watcher.communicate(timeout=240)[0]
+    check(watcher.returncode == 0, "the run ends done (robocal watch exits 0 only then): " +
+          " | ".join(watched.splitlines()[-2:]))
+    box = wait_until("the result card shows a verdict",
+                     lambda: driver.find_element(By.ID, "verdict"), timeout_s=60)
+    result = json.loads(robocal(a, "result", "--port", str(a.tcp_port), "--json"))
+    verdict = result["verdict"]
+    check(not verdict["usable"] and "bad" in box.get_attribute("class"),
+          "the card says NOT USABLE, as RESULT does: " + box.text.splitlines()[0])
+    check(all(p in box.text for p in verdict["problems"]) and len(verdict["problems"]) > 0,
+          f"the card lists RESULT's {len(verdict['problems'])} problem(s)")
+    check(verdict["model_file"] in box.text and verdict["next"]["command"] in box.text,
+          "and its model path and next command: " + verdict["next"]["command"])
+    printed = robocal(a, "result", "--port", str(a.tcp_port))
+    for line in box.text.splitlines()[:1] + ["next: " + verdict["next"]["command"]]:
+        check(line in printed, "robocal result prints the same: " + line)
+    page = open(result["report_dir"] + "/summary.html").read()
+    check(html.escape(verdict["problems"][0], quote=True).replace("&#x27;", "&#39;") in page and
+          "NOT USABLE as a calibration" in page, "summary.html gives the same verdict")
+    driver.execute_script("document.getElementById('result').scrollIntoView()")
+    shots(driver, a.screenshot, "result")
 
 
 if __name__ == "__main__":

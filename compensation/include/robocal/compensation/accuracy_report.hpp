@@ -40,15 +40,17 @@ AccuracyReport predictedWholeRangeAccuracy(const Compensator& compensator);
 // A fit's predicted accuracy where the user works and beyond it, as `robocal solve` and robocald's
 // RESULT report it, from the same code: JSON for the "work_volume" and "whole_range" keys
 // ({"error": ...} when one cannot be computed: a volume out of reach, a model compensation cannot
-// use), the text for a terminal, and the work volume's RMS. With `report_dir`, the work volume's
-// report files go there (writeWorkVolumeReport).
+// use), the text for a terminal, the work volume's and the whole range's RMS, and the work
+// volume's report for writeWorkVolumeReport. No I/O.
 struct PredictedAccuracy {
   nlohmann::ordered_json work_volume, whole_range;
   std::string text;
-  std::optional<double> work_volume_rms_mm;
+  std::optional<double> work_volume_rms_mm, whole_range_rms_mm;
+  std::string problem;  // why one of them is missing, "" when both are there
+  std::optional<AccuracyReport> work_volume_report;
 };
 PredictedAccuracy predictedAccuracy(const Model& nominal, const Model& calibrated,
-                                    const WorkVolume& work, const std::string& report_dir = "");
+                                    const WorkVolume& work);
 
 // Writes DIR/work_volume.json (accuracyJson with every pose) and DIR/work_volume.svg.
 void writeWorkVolumeReport(const std::string& dir, const AccuracyReport& report);

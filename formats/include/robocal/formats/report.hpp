@@ -11,11 +11,13 @@
 // Units: mm and deg, named in every key (gains are unitless: "gain").
 #pragma once
 
+#include <robocal/formats/result_verdict.hpp>
 #include <robocal/kinematics/sample.hpp>
 #include <robocal/solver/assessment.hpp>
 
 #include <chrono>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -52,9 +54,29 @@ Model calibratedModel(
 // (docs/calibration.md lists every key).
 nlohmann::ordered_json fitSummaryJson(const FitAssessment& fit);
 
+// A figure in the report folder: its file name there, a caption, and its SVG text.
+struct ReportFigure {
+  std::string file;
+  std::string caption;
+  std::string svg;
+};
+
+// What the report holds beyond the fit itself: the verdict (with the predicted accuracy, the
+// model's path and the next step; without one, the page's box says usable or not from the fit
+// alone) and figures others wrote into the folder (the work-volume map), shown and linked.
+struct ReportExtras {
+  std::optional<ResultVerdict> verdict;
+  std::vector<ReportFigure> figures;
+};
+
+// The verdict from the fit alone: usable or not, why, and the rank; no accuracy, model or next
+// step.
+ResultVerdict fitOnlyVerdict(const FitAssessment& fit);
+
 // Writes DIR/report.json, DIR/summary.html, DIR/residuals_vs_longitude.svg,
 // DIR/residual_histogram.svg, DIR/shell_rms.svg and, with held-out samples, DIR/validation_*.svg.
 // `calibrated` is the model as written (its name and provenance head the summary page).
-void writeReport(const std::string& dir, const FitAssessment& fit, const Model& calibrated);
+void writeReport(const std::string& dir, const FitAssessment& fit, const Model& calibrated,
+                 const ReportExtras& extras = {});
 
 }  // namespace robocal
