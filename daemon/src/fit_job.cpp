@@ -1,7 +1,9 @@
 #include "fit_job.hpp"
 
 #include <robocal/calibration/fit_pipeline.hpp>
+#include <robocal/formats/error.hpp>
 #include <robocal/formats/health_report.hpp>
+#include <robocal/formats/iso_report.hpp>
 #include <robocal/formats/model_json.hpp>
 #include <robocal/formats/samples_csv.hpp>
 
@@ -28,6 +30,22 @@ std::optional<Model> previousSetModel(const json& last_result, const std::string
   }
 }
 
+// The run's samples file, read as robocal solve and iso-report read it (here, while nothing
+// appends to it): a RESULT is then `robocal solve --json` of that file plus the run's keys, by
+// construction, and outliers are named by line. The run's own samples when the file disagrees.
+std::vector<Sample> samplesAsFiled(const RunDir& dir, std::vector<Sample> samples) {
+  std::vector<Sample> filed;
+  try {
+    filed = loadSamplesFile(dir.file("samples.csv"));
+  } catch (const std::exception& e) {
+    spdlog::warn("the samples file cannot be read back: {}", e.what());
+  }
+  if (filed.size() == samples.size()) return filed;
+  spdlog::warn("the samples file holds {} samples, the run {}: using the run's", filed.size(),
+               samples.size());
+  return samples;
+}
+
 }  // namespace
 
 void FitJob::launch(RunDir dir, std::vector<Sample> samples, double set_extension_mm, int set_index,
@@ -36,20 +54,7 @@ void FitJob::launch(RunDir dir, std::vector<Sample> samples, double set_extensio
   int previous_set = 0;
   const json last = shared_.with([](const RunData& d) { return d.last_result; });
   std::optional<Model> previous = previousSetModel(last, dir.id(), previous_set);
-  // The samples file, read as robocal solve reads it (here, while nothing appends to it): the
-  // RESULT is then `robocal solve --json` of that file plus the run's keys, by construction, and
-  // outliers are named by line.
-  std::vector<Sample> fitted;
-  try {
-    fitted = loadSamplesFile(dir.file("samples.csv"));
-  } catch (const std::exception& e) {
-    spdlog::warn("the samples file cannot be read back for the fit: {}", e.what());
-  }
-  if (fitted.size() != samples.size()) {
-    spdlog::warn("the samples file holds {} samples, the run {}: fitting the run's", fitted.size(),
-                 samples.size());
-    fitted = std::move(samples);
-  }
+  std::vector<Sample> fitted = samplesAsFiled(dir, std::move(samples));
   running_ = std::async(std::launch::async, [this, dir, fitted = std::move(fitted),
                                              set_extension_mm, set_index, previous, previous_set,
                                              approach_deg]() mutable {
@@ -156,6 +161,36 @@ void FitJob::launchCheck(RunDir dir, std::vector<Sample> samples) {
                false);
     }
   });
+}
+
+void FitJob::launchIso(RunDir dir, std::vector<Sample> samples, IsoTestSettings settings) {
+  wait();
+  samples = samplesAsFiled(dir, std::move(samples));
+  running_ =
+      std::async(std::launch::async, [this, dir, samples = std::move(samples), settings]() mutable {
+        try {
+          const IsoResult iso = assessIsoTest(nominal_, samples, settings.warmup_cycles);
+          const IsoConditions conditions{nominal_.name, dir.file("samples.csv"), settings.cycles,
+                                         settings.spread_deg, dateUtcNow()};
+          const json report = isoJson(iso, conditions);
+          dir.writeJson("iso9283.json", report);
+          writeTextFileAtomic(dir.file("iso9283.txt"), isoText(iso, conditions));
+          json event = {{"class", "EVENT"},
+                        {"event", "iso_report"},
+                        {"run", dir.id()},
+                        {"file", dir.file("iso9283.json")},
+                        {"report", report}};
+          dir.logEvent({{"event", "iso_report"}, {"file", dir.file("iso9283.json")}});
+          spdlog::info("ISO 9283-style test {}: {} readings, report {}", dir.id(), iso.readings,
+                       dir.file("iso9283.txt"));
+          publish_(event, false);
+        } catch (const std::exception& e) {
+          spdlog::error("ISO test report failed: {}", e.what());
+          dir.logEvent({{"event", "iso_report"}, {"error", e.what()}});
+          publish_(proto::toJson(proto::Error{std::string("ISO test report: ") + e.what(), {}, {}}),
+                   false);
+        }
+      });
 }
 
 }  // namespace robocal::daemon

@@ -13,6 +13,7 @@
 #include <robocal/kinematics/model.hpp>
 #include <robocal/kinematics/sample.hpp>
 #include <robocal/planner/cell.hpp>
+#include <robocal/planner/plan.hpp>
 #include <robocal/solver/health.hpp>
 
 #include <future>
@@ -44,6 +45,10 @@ class FitJob {
   // the verdict goes to the run folder (check.json), the event log, the model's history and the
   // clients (CHECK).
   void launchCheck(RunDir dir, std::vector<Sample> samples);
+  // An ISO 9283-style test run's end (planner/iso_plan.hpp): its figures against the nominal
+  // model the plan was made with, written to the run folder (iso9283.json, iso9283.txt), the
+  // event log, and the clients (an EVENT "iso_report" with the figures).
+  void launchIso(RunDir dir, std::vector<Sample> samples, IsoTestSettings settings);
   void wait() {
     if (running_.valid()) running_.wait();
   }

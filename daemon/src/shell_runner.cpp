@@ -532,8 +532,10 @@ void ShellRunner::completeSet(std::size_t shell_index, bool only_unfitted) {
   }
   const int set_index = static_cast<int>(seen.size());
   const bool check = plan_.purpose == PlanPurpose::kCheck;
-  const std::string outcome_file =
-      check ? "check.json" : "result-set" + std::to_string(set_index) + ".json";
+  const bool iso = plan_.purpose == PlanPurpose::kIsoTest && plan_.iso;
+  const std::string outcome_file = check ? "check.json"
+                                   : iso ? "iso9283.json"
+                                         : "result-set" + std::to_string(set_index) + ".json";
   if (only_unfitted && std::filesystem::exists(dir_.file(outcome_file))) return;
   ctx_.event(dir_, {{"event", "set_complete"},
                     {"set", set_index},
@@ -541,6 +543,8 @@ void ShellRunner::completeSet(std::size_t shell_index, bool only_unfitted) {
                     {"again", only_unfitted}});
   if (check)
     fits_.launchCheck(dir_, samples_);  // a verdict on the active model, not a new fit
+  else if (iso)
+    fits_.launchIso(dir_, samples_, *plan_.iso);  // the test's figures, not a fit
   else
     // The plan's approach, unless the cell the re-plans use has another: then the points were
     // reached both ways and the model records the smaller (0: none assumed).

@@ -97,6 +97,10 @@ ordered_json planToJson(const Plan& plan) {
   j["version"] = kPlanFormatVersion;
   j["model"] = plan.model_name;
   j["purpose"] = planPurposeName(plan.purpose);
+  if (plan.iso)
+    j["iso"] = {{"cycles", plan.iso->cycles},
+                {"warmup_cycles", plan.iso->warmup_cycles},
+                {"spread_deg", plan.iso->spread_deg}};
   const PlanSummary& s = plan.summary;
   ordered_json summary;
   summary["shells"] = s.shells;
@@ -198,8 +202,24 @@ Plan planFromJson(const json& root, const std::string& source) {
     const std::string purpose = r.string(root, "", "purpose");
     const auto parsed = parsePlanPurpose(purpose);
     if (!parsed)
-      r.fail("purpose", "expected \"calibration\" or \"check\", got \"" + purpose + "\"");
+      r.fail("purpose",
+             "expected \"calibration\", \"check\" or \"iso9283\", got \"" + purpose + "\"");
     plan.purpose = *parsed;
+  }
+  if (plan.purpose == PlanPurpose::kIsoTest) {
+    const json& iso = r.member(root, "", "iso");
+    IsoTestSettings t;
+    auto whole = [&](const char* key, int lo, int hi) {
+      const double v = r.number(iso, "iso", key);
+      if (v != std::floor(v) || v < lo || v > hi)
+        r.fail(std::string("iso.") + key,
+               "expected a whole number from " + std::to_string(lo) + " to " + std::to_string(hi));
+      return static_cast<int>(v);
+    };
+    t.cycles = whole("cycles", 2, 1000);
+    t.warmup_cycles = whole("warmup_cycles", 0, 1000);
+    t.spread_deg = r.number(iso, "iso", "spread_deg");
+    plan.iso = t;
   }
   plan.cell = cellFromJson(r.member(root, "", "settings"), source + ": settings");
   const json& shells = r.array(root, "", "shells");

@@ -907,12 +907,21 @@ ShellPlan ShellPlanner::replanRemaining(const ShellPlan& old, std::size_t next_s
 }
 
 const char* planPurposeName(PlanPurpose purpose) {
-  return purpose == PlanPurpose::kCheck ? "check" : "calibration";
+  switch (purpose) {
+    case PlanPurpose::kCheck:
+      return "check";
+    case PlanPurpose::kIsoTest:
+      return "iso9283";
+    case PlanPurpose::kCalibration:
+      break;
+  }
+  return "calibration";
 }
 
 std::optional<PlanPurpose> parsePlanPurpose(const std::string& name) {
   if (name == "calibration") return PlanPurpose::kCalibration;
   if (name == "check") return PlanPurpose::kCheck;
+  if (name == "iso9283") return PlanPurpose::kIsoTest;
   return std::nullopt;
 }
 

@@ -107,18 +107,27 @@ struct PlanSummary {
   double noise_sigma_mm = 0;
 };
 
-// What a plan is for: the calibration's data, or the short check that the calibrated model still
-// fits the robot (docs/health-check.md). Plan files without it are calibration plans.
-enum class PlanPurpose { kCalibration, kCheck };
-// "calibration", "check".
+// What a plan is for: the calibration's data, the short check that the calibrated model still
+// fits the robot (docs/health-check.md), or the ISO 9283-style performance test (iso_plan.hpp,
+// docs/iso9283.md). Plan files without it are calibration plans.
+enum class PlanPurpose { kCalibration, kCheck, kIsoTest };
+// "calibration", "check", "iso9283".
 const char* planPurposeName(PlanPurpose purpose);
 // The purpose named `name`, or nullopt.
 std::optional<PlanPurpose> parsePlanPurpose(const std::string& name);
 
+// The ISO 9283-style test's settings (iso_plan.hpp), kept in its plan for the report.
+struct IsoTestSettings {
+  int cycles = 30;         // measured cycles P1..P5, the standard's 30
+  int warmup_cycles = 3;   // cycles before them, moved and measured but left out of the figures
+  double spread_deg = 15;  // P2..P5 this far from P1 in latitude and longitude
+};
+
 struct Plan {
   std::string model_name;
   PlanPurpose purpose = PlanPurpose::kCalibration;
-  CellConfig cell;  // the settings used
+  std::optional<IsoTestSettings> iso;  // purpose kIsoTest only
+  CellConfig cell;                     // the settings used
   std::vector<ShellPlan> shells;
   PlanSummary summary;
 };
