@@ -154,6 +154,11 @@ void printText(const FitAssessment& a, const Model& calibrated, size_t files) {
   std::printf("\ncalibrated model: %s\n", calibrated.name.c_str());
 }
 
+// The path as provenance and the verdict's commands name it: absolute, without "." or "..".
+std::string absolutePath(const std::string& path) {
+  return std::filesystem::absolute(path).lexically_normal().string();
+}
+
 int run(const std::vector<std::string>& argv) {
   const Args args(argv,
                   {"model", "out", "validate", "report", "outlier-sigmas", "truth",
@@ -170,7 +175,7 @@ int run(const std::vector<std::string>& argv) {
   for (const std::string& path : args.positional()) {
     auto more = loadSamplesFile(path);
     samples.insert(samples.end(), more.begin(), more.end());
-    origin.samples_files.push_back(std::filesystem::absolute(path).lexically_normal().string());
+    origin.samples_files.push_back(absolutePath(path));
   }
   if (samples.empty()) throw UsageError("the samples files hold no samples");
   origin.approach_deg = approachDegArg(args).value_or(0);
@@ -204,12 +209,9 @@ int run(const std::vector<std::string>& argv) {
   const bool refuse = !fit.problems.empty() && !args.flag("allow-partial");
   if (args.has("out") && !refuse) {
     saveModelFile(args.get("out", ""), calibrated);
-    outcome.verdict.model_file =
-        std::filesystem::absolute(args.get("out", "")).lexically_normal().string();
+    outcome.verdict.model_file = absolutePath(args.get("out", ""));
   }
-  nextStepOffline(outcome.verdict,
-                  std::filesystem::absolute(args.required("model")).lexically_normal().string(),
-                  origin.samples_files);
+  nextStepOffline(outcome.verdict, absolutePath(args.required("model")), origin.samples_files);
   if (args.has("report")) writeFitReport(outcome, args.get("report", ""));
   // Where the user works and beyond it (robocald's RESULT has the same, from the same code).
   const nlohmann::ordered_json summary = fitResultJson(outcome);

@@ -84,13 +84,11 @@ void writeFitReport(const FitOutcome& o, const std::string& dir) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) throw FormatError(dir + ": cannot create the report folder: " + ec.message());
-  if (o.accuracy.work_volume_report) {
-    writeWorkVolumeReport(dir, *o.accuracy.work_volume_report);
+  if (o.accuracy.work_volume_report)
     extras.figures.push_back({"work_volume.svg",
                               "Predicted tool position error over the cell's work volume "
                               "(work_volume.json has every pose)",
-                              accuracySvg(*o.accuracy.work_volume_report)});
-  }
+                              writeWorkVolumeReport(dir, *o.accuracy.work_volume_report)});
   writeReport(dir, o.fit, o.calibrated, extras);
 }
 

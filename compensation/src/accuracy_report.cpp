@@ -274,9 +274,11 @@ PredictedAccuracy predictedAccuracy(const Model& nominal, const Model& calibrate
   return out;
 }
 
-void writeWorkVolumeReport(const std::string& dir, const AccuracyReport& report) {
+std::string writeWorkVolumeReport(const std::string& dir, const AccuracyReport& report) {
   writeTextFileAtomic(dir + "/work_volume.json", accuracyJson(report, true).dump(2) + "\n");
-  writeTextFileAtomic(dir + "/work_volume.svg", accuracySvg(report));
+  std::string svg = accuracySvg(report);
+  writeTextFileAtomic(dir + "/work_volume.svg", svg);
+  return svg;
 }
 
 }  // namespace robocal

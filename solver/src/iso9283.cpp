@@ -141,25 +141,18 @@ IsoResult assessIsoTest(const Model& model, const std::vector<Sample>& samples, 
     out.pairs.push_back(pair);
   }
 
-  // P1's drift: its distance regressed on time over the measured cycles.
-  std::vector<std::pair<double, double>> timed;  // (minutes, error)
-  for (const Sample* s : p1.cycles)
-    if (s->time_s) timed.push_back({*s->time_s / 60, s->length_mm - commanded(*s)});
-  if (timed.size() >= 3) {
-    const double n = static_cast<double>(timed.size());
-    double mt = 0, me = 0;
-    for (const auto& [t, e] : timed) mt += t / n, me += e / n;
-    double sxx = 0, sxy = 0;
-    for (const auto& [t, e] : timed) sxx += (t - mt) * (t - mt), sxy += (t - mt) * (e - me);
-    if (sxx > 0) {
-      const double slope = sxy / sxx;
-      double sse = 0;
-      for (const auto& [t, e] : timed) sse += std::pow(e - me - slope * (t - mt), 2);
-      const double se = std::sqrt(sse / (n - 2) / sxx);
-      const double span = timed.back().first - timed.front().first;
-      const double half = studentT975(static_cast<int>(timed.size()) - 2) * se * span;
-      out.drift = {true, span, {slope * span, slope * span - half, slope * span + half}};
-    }
+  // P1's drift: its distance regressed on time over the measured cycles (measureDrift, one place).
+  std::vector<Sample> p1_samples;
+  for (const Sample* s : p1.cycles) p1_samples.push_back(*s);
+  Eigen::VectorXd p1_errors(static_cast<Eigen::Index>(p1_samples.size()));
+  for (std::size_t k = 0; k < p1_samples.size(); ++k)
+    p1_errors[static_cast<Eigen::Index>(k)] = p1_samples[k].length_mm - commanded(p1_samples[k]);
+  const Drift d = measureDrift(p1_samples, p1_errors);
+  if (d.measured) {
+    const double span_h = d.span_min / 60;
+    const double change = d.rate_mm_per_h * span_h;
+    const double half = studentT975(d.readings - 2) * d.rate_sigma_mm_per_h * span_h;
+    out.drift = {true, d.span_min, {change, change - half, change + half}};
   }
   return out;
 }

@@ -52,7 +52,8 @@ struct PredictedAccuracy {
 PredictedAccuracy predictedAccuracy(const Model& nominal, const Model& calibrated,
                                     const WorkVolume& work);
 
-// Writes DIR/work_volume.json (accuracyJson with every pose) and DIR/work_volume.svg.
-void writeWorkVolumeReport(const std::string& dir, const AccuracyReport& report);
+// Writes DIR/work_volume.json (accuracyJson with every pose) and DIR/work_volume.svg; returns
+// the SVG's text (the fit's summary page shows it).
+std::string writeWorkVolumeReport(const std::string& dir, const AccuracyReport& report);
 
 }  // namespace robocal
