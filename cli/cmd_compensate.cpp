@@ -14,7 +14,7 @@ namespace {
 
 constexpr const char* kHelp =
     R"(usage: robocal compensate --model CALIBRATED --targets FILE --out FILE
-                          [--nominal NOMINAL] [--tool x,y,z,rz,ry,rx] [--format csv|val2|val2-move]
+                          [--nominal NOMINAL] [--tool x,y,z,rz,ry,rx] [--format F]
        robocal compensate --model CALIBRATED --program FILE --dialect as|vplus|val2 --out FILE
 
 Corrected joint readings that put the real robot's tool at each target, computed with the
@@ -56,6 +56,10 @@ unreachable; the last two carry no joints (docs/compensation.md).
                         val2-move: DO MOVE #PPOINT(...) lines
                         (with an approach, each target's pre-point on the line before it;
                         rows that cannot be commanded become ; comment lines)
+                        vplus-locations, as-joints: a location file (a V+ .LOCATIONS or a
+                        Kawasaki AS .JOINTS block), #name j1 ... j6 per target (its name,
+                        else p<line>), its pre-point as #name_pre; rows that cannot be
+                        commanded become ; comment lines
 
 exit status: 0 every target ok, 1 an unreadable input, 2 a usage error,
              3 written, but some targets are not ok (listed on stderr)
@@ -127,7 +131,8 @@ int run(const std::vector<std::string>& argv) {
   const std::string targets_path = args.required("targets");
   options.approach_deg = approachDegArg(args);
   const auto format = parseOutputFormat(args.get("format", "csv"));
-  if (!format) throw UsageError("--format: expected csv, val2 or val2-move");
+  if (!format)
+    throw UsageError("--format: expected csv, val2, val2-move, vplus-locations or as-joints");
   if (!calibrated.covariance)
     std::fprintf(stderr,
                  "robocal compensate: note: %s has no covariance: predicted_error_mm stays "

@@ -4,8 +4,10 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <set>
 
 namespace robocal {
 namespace {
@@ -136,60 +138,118 @@ std::optional<OutputFormat> parseOutputFormat(const std::string& word) {
   if (word == "csv") return OutputFormat::kCsv;
   if (word == "val2") return OutputFormat::kVal2Points;
   if (word == "val2-move") return OutputFormat::kVal2Moves;
+  if (word == "vplus-locations") return OutputFormat::kVplusLocations;
+  if (word == "as-joints") return OutputFormat::kAsJoints;
   return std::nullopt;
 }
 
-std::string formatCompensated(const TargetFile& file, const std::vector<CompensatedTarget>& results,
-                              OutputFormat format, double approach_deg) {
-  std::string out;
-  if (format == OutputFormat::kCsv) {
-    if (file.has_names) out += "name,";
-    out += "j1,j2,j3,j4,j5,j6,a1,a2,a3,a4,a5,a6,predicted_error_mm,status,config,note\n";
-  } else {
-    out += "; robocal compensate: corrected joint readings (deg) of " + file.source + "\n";
-    if (approach_deg > 0)
-      out += "; each target follows its approach pre-point, " + fixed(approach_deg, 4) +
-             " deg below it in every joint: reach the target from there, as the calibration "
-             "reached its points" +
-             (format == OutputFormat::kVal2Moves ? "" : " (the pre-points are comments)") + "\n";
+namespace {
+
+std::string predictedText(const CompensatedTarget& r) {
+  return std::isnan(r.predicted_position_error_mm) ? "" : fixed(r.predicted_position_error_mm, 4);
+}
+
+// "; " + why a target is not ok, or "" when it is.
+std::string statusSuffix(const CompensatedTarget& r) {
+  if (r.status == CompensationStatus::kOk) return "";
+  return std::string(": ") + compensationStatusName(r.status) + ": " + r.reason;
+}
+
+std::string csvOutput(const TargetFile& file, const std::vector<CompensatedTarget>& results) {
+  std::string out = file.has_names ? "name," : "";
+  out += "j1,j2,j3,j4,j5,j6,a1,a2,a3,a4,a5,a6,predicted_error_mm,status,config,note\n";
+  for (size_t i = 0; i < results.size(); ++i) {
+    const CompensatedTarget& r = results[i];
+    const bool joints = r.hasJoints();
+    if (file.has_names) out += file.targets[i].name + ",";
+    for (int j = 0; j < kJointCount; ++j) out += (joints ? fixed(r.joints_deg[j], 10) : "") + ",";
+    for (int j = 0; j < kJointCount; ++j)
+      out += (joints && r.hasApproach() ? std::to_string(r.approach[j]) : "") + ",";
+    out += predictedText(r) + "," + compensationStatusName(r.status) + "," +
+           armConfigName(r.config) + "," + csvText(r.reason) + "\n";
   }
+  return out;
+}
+
+std::string val2Output(const TargetFile& file, const std::vector<CompensatedTarget>& results,
+                       bool moves) {
+  std::string out;
   for (size_t i = 0; i < results.size(); ++i) {
     const CompensatedTarget& r = results[i];
     const std::string& name = file.targets[i].name;
-    const bool joints = r.hasJoints();
-    const std::string predicted =
-        std::isnan(r.predicted_position_error_mm) ? "" : fixed(r.predicted_position_error_mm, 4);
-    if (format == OutputFormat::kCsv) {
-      if (file.has_names) out += name + ",";
-      for (int j = 0; j < kJointCount; ++j) out += (joints ? fixed(r.joints_deg[j], 10) : "") + ",";
-      for (int j = 0; j < kJointCount; ++j)
-        out += (joints && r.hasApproach() ? std::to_string(r.approach[j]) : "") + ",";
-      out += predicted + "," + compensationStatusName(r.status) + "," + armConfigName(r.config) +
-             "," + csvText(r.reason) + "\n";
-      continue;
-    }
     const std::string label = name.empty() ? "line " + std::to_string(file.targets[i].line) : name;
-    if (!joints) {
-      out += "; " + label + ": " + compensationStatusName(r.status) + ": " + r.reason + "\n";
-      continue;
-    }
-    // Every target named (its name, else its line in the targets file), so a person can find it.
-    out += "; " + label +
-           (r.status == CompensationStatus::kOk
-                ? std::string()
-                : std::string(": ") + compensationStatusName(r.status) + ": " + r.reason) +
-           "\n";
+    // Every target named (its name, else its line in the targets file), so a person can find it;
+    // one that cannot be commanded is only that comment.
+    out += "; " + label + statusSuffix(r) + "\n";
+    if (!r.hasJoints()) continue;
     const auto point = [&](const JointsDeg& q) {
-      std::string text = format == OutputFormat::kVal2Moves ? "DO MOVE #PPOINT(" : "#PPOINT(";
+      std::string text = moves ? "DO MOVE #PPOINT(" : "#PPOINT(";
       for (int j = 0; j < kJointCount; ++j) text += (j ? ", " : "") + fixed(q[j], 4);
       return text + ")\n";
     };
     // A points list stays one line a target (programs index it): its pre-point is a comment.
-    if (r.hasApproach())
-      out += (format == OutputFormat::kVal2Moves ? "" : "; pre-point ") + point(r.pre_point_deg);
+    if (r.hasApproach()) out += (moves ? "" : "; pre-point ") + point(r.pre_point_deg);
     out += point(r.joints_deg);
   }
   return out;
+}
+
+// A name a V+ or AS location takes: a letter, then letters, digits, '.' or '_'.
+bool isLocationName(const std::string& name) {
+  if (name.empty() || !std::isalpha(static_cast<unsigned char>(name[0]))) return false;
+  return std::all_of(name.begin(), name.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.';
+  });
+}
+
+std::string locationOutput(const TargetFile& file, const std::vector<CompensatedTarget>& results,
+                           OutputFormat format) {
+  const bool as = format == OutputFormat::kAsJoints;
+  std::string body;
+  std::set<std::string> used;
+  const auto define = [&](const std::string& name, const JointsDeg& q, const Target& t) {
+    if (!used.insert(name).second)
+      throw FormatError(file.source + ":" + std::to_string(t.line) + ": location #" + name +
+                        " would be defined twice in the " + (as ? "AS" : "V+") +
+                        " location file: give each target its own name (a pre-point is "
+                        "name_pre)");
+    body += "#" + name;
+    for (int j = 0; j < kJointCount; ++j) body += " " + fixed(q[j], 6);
+    body += "\n";
+  };
+  for (size_t i = 0; i < results.size(); ++i) {
+    const CompensatedTarget& r = results[i];
+    const Target& t = file.targets[i];
+    const std::string name = t.name.empty() ? "p" + std::to_string(t.line) : t.name;
+    if (!isLocationName(name))
+      throw FormatError(file.source + ":" + std::to_string(t.line) + ": '" + name +
+                        "' is not a location name (a letter, then letters, digits, '.' or '_')");
+    if (r.status != CompensationStatus::kOk) body += "; " + name + statusSuffix(r) + "\n";
+    if (!r.hasJoints()) continue;
+    if (r.hasApproach()) define(name + "_pre", r.pre_point_deg, t);
+    define(name, r.joints_deg, t);
+  }
+  return std::string(as ? ".JOINTS" : ".LOCATIONS") + "\n" + body + ".END\n";
+}
+
+}  // namespace
+
+std::string formatCompensated(const TargetFile& file, const std::vector<CompensatedTarget>& results,
+                              OutputFormat format, double approach_deg) {
+  if (format == OutputFormat::kCsv) return csvOutput(file, results);
+  const bool locations =
+      format == OutputFormat::kVplusLocations || format == OutputFormat::kAsJoints;
+  std::string out = "; robocal compensate: corrected joint readings (deg) of " + file.source + "\n";
+  if (approach_deg > 0)
+    out += "; each target follows its approach pre-point, " + fixed(approach_deg, 4) +
+           " deg below it in every joint: reach the target from there, as the calibration "
+           "reached its points" +
+           (format == OutputFormat::kVal2Points ? " (the pre-points are comments)"
+            : locations                         ? " (a target's pre-point is name_pre)"
+                                                : "") +
+           "\n";
+  if (locations) return out + locationOutput(file, results, format);
+  return out + val2Output(file, results, format == OutputFormat::kVal2Moves);
 }
 
 }  // namespace robocal

@@ -118,6 +118,23 @@ TEST_CASE("[cli] robocal compensate and accuracy on a simulated calibration") {
     CHECK_THAT(val2, Contains("DO MOVE #PPOINT("));
     CHECK_THAT(val2, Contains("; away: unreachable"));
 
+    r = runRobocal("compensate --model " + dir / "cal.json" + " --nominal " + kModel +
+                   " --targets " + dir / "poses.csv" + " --out " + dir / "p.lc" +
+                   " --format vplus-locations");
+    CHECK(r.exit_code == 3);
+    const std::string lc = readFile(dir / "p.lc");
+    CHECK_THAT(lc, Contains("\n.LOCATIONS\n#home "));
+    CHECK_THAT(lc, Contains("\n; away: unreachable"));
+    // A name the controller would not take: refused with its line, nothing written.
+    writeFile(dir / "named.csv",
+              "name,x_mm,y_mm,z_mm,rz_deg,ry_deg,rx_deg\nhome 2,0,0,250,0,135,0\n");
+    r = runRobocal("compensate --model " + dir / "cal.json" + " --nominal " + kModel +
+                   " --targets " + dir / "named.csv" + " --out " + dir / "never.as" +
+                   " --format as-joints");
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.output, Contains("named.csv:2: 'home 2' is not a location name"));
+    CHECK_FALSE(std::ifstream(dir / "never.as").good());
+
     writeFile(dir / "bad.csv", "x_mm,y_mm,z_mm,rz_deg,ry_deg,rx_deg\n1,2,3,4,5\n");
     r = runRobocal("compensate --model " + dir / "cal.json" + " --nominal " + kModel +
                    " --targets " + dir / "bad.csv" + " --out " + dir / "never.csv");

@@ -7,6 +7,7 @@
 #include <robocal/compensation/accuracy_report.hpp>
 #include <robocal/compensation/targets.hpp>
 #include <robocal/formats/model_json.hpp>
+#include <robocal/formats/program.hpp>
 #include <robocal/kinematics/puma560.hpp>
 #include <robocal/planner/cell_json.hpp>
 #include <robocal/sim/measurements.hpp>
@@ -349,6 +350,59 @@ TEST_CASE("targets are reached as the calibration reached its points: up from a 
   const auto limited = compensateAll(Compensator(nominal, tight));
   CHECK(limited[0].status == CompensationStatus::kOutsideLimits);
   CHECK_THAT(limited[0].reason, Contains("approach pre-point puts joint 1"));
+}
+
+TEST_CASE("a V+ or AS location file holds every reachable target and its pre-point by name") {
+  const Model nominal = puma560NominalModel();
+  Model calibrated = perturbed(4);
+  ModelProvenance p;
+  p.approach_deg = 0.02;
+  calibrated.provenance = p;
+  const Compensator comp(nominal, calibrated);
+  // Named, unnamed (line 3: p3) and unreachable targets.
+  const TargetFile file = parseTargets(
+      "name,x_mm,y_mm,z_mm,rz_deg,ry_deg,rx_deg\nnear,0,0,250,0,135,0\n,50,0,250,0,135,0\n"
+      "far,3000,0,0,0,0,0\n",
+      "t.csv");
+  std::vector<CompensatedTarget> results;
+  for (const Target& t : file.targets) results.push_back(compensateTarget(comp, t));
+  REQUIRE(results[0].ok());
+  REQUIRE(results[1].ok());
+  REQUIRE(results[2].status == CompensationStatus::kUnreachable);
+  for (const auto& [format, dialect] :
+       {std::pair{OutputFormat::kVplusLocations, ProgramDialect::kVplus},
+        std::pair{OutputFormat::kAsJoints, ProgramDialect::kAs}}) {
+    const std::string text = formatCompensated(file, results, format, comp.approachDeg());
+    // robocal's own program reader takes it as a file of that dialect, and only of that one.
+    const ProgramFile back = parseProgram(text, dialect, "out");
+    CHECK_THROWS_AS(parseProgram(text, dialect == ProgramDialect::kAs ? ProgramDialect::kVplus
+                                                                      : ProgramDialect::kAs),
+                    FormatError);
+    REQUIRE(back.locations.size() == 4);  // two targets, each with its pre-point
+    const std::vector<std::pair<std::string, JointsDeg>> expected = {
+        {"#near_pre", results[0].pre_point_deg},
+        {"#near", results[0].joints_deg},
+        {"#p3_pre", results[1].pre_point_deg},
+        {"#p3", results[1].joints_deg}};
+    for (size_t k = 0; k < expected.size(); ++k) {
+      CHECK(back.locations[k].name == expected[k].first);
+      CHECK((back.locations[k].joints_deg - expected[k].second).cwiseAbs().maxCoeff() < 5e-7);
+    }
+    CHECK_THAT(text, Contains("\n; far: unreachable: "));  // named, never commanded
+    CHECK(text.find("#far") == std::string::npos);
+  }
+  // A name no controller takes, or one defined twice, is refused with the targets file's line.
+  const auto refused = [&](const std::string& csv) {
+    const TargetFile bad = parseTargets(csv, "bad.csv");
+    std::vector<CompensatedTarget> r;
+    for (const Target& t : bad.targets) r.push_back(compensateTarget(comp, t));
+    return formatCompensated(bad, r, OutputFormat::kAsJoints, comp.approachDeg());
+  };
+  CHECK_THROWS_WITH(refused("name,x_mm,y_mm,z_mm,rz_deg,ry_deg,rx_deg\n2nd pick,0,0,250,0,135,0\n"),
+                    Contains("bad.csv:2: '2nd pick' is not a location name"));
+  CHECK_THROWS_WITH(refused("name,x_mm,y_mm,z_mm,rz_deg,ry_deg,rx_deg\na_pre,0,0,250,0,135,0\n"
+                            "a,50,0,250,0,135,0\n"),
+                    Contains("bad.csv:3: location #a_pre would be defined twice"));
 }
 
 TEST_CASE("a calibrated model's covariance survives its file, and a bad one is refused") {
