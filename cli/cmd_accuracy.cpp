@@ -77,11 +77,18 @@ int run(const std::vector<std::string>& argv) {
   } else if (args.has("poses")) {
     const TargetFile file = loadTargetsFile(args.get("poses", ""));
     std::vector<Eigen::Isometry3d> poses;
+    std::vector<std::optional<ArmConfig>> configs;  // the config column's, as compensate's
     std::vector<JointsDeg> joints;
-    for (const Target& t : file.targets)
-      t.pose ? poses.push_back(*t.pose) : joints.push_back(*t.nominal_joints);
+    for (const Target& t : file.targets) {
+      if (!t.pose) {
+        joints.push_back(*t.nominal_joints);
+        continue;
+      }
+      poses.push_back(*t.pose);
+      configs.push_back(t.config);
+    }
     report = file.joints_form ? assessAccuracyAtJoints(compensator, joints, true_robot)
-                              : assessAccuracy(compensator, poses, true_robot);
+                              : assessAccuracy(compensator, poses, true_robot, configs);
     report.poses_from = args.get("poses", "");
   } else {
     const CellConfig cell = args.has("cell") ? loadCellFile(args.get("cell", "")) : CellConfig{};

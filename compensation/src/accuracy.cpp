@@ -94,10 +94,15 @@ ErrorStats errorStats(std::vector<double> values) {
 }
 
 AccuracyReport assessAccuracy(const Compensator& compensator,
-                              const std::vector<Eigen::Isometry3d>& targets,
-                              const TrueRobot* truth) {
+                              const std::vector<Eigen::Isometry3d>& targets, const TrueRobot* truth,
+                              const std::vector<std::optional<ArmConfig>>& configs) {
+  if (!configs.empty() && configs.size() != targets.size())
+    throw std::invalid_argument("assessAccuracy: one configuration a target, or none");
   return assess(
-      compensator, targets.size(), [&](std::size_t i) { return compensator.forPose(targets[i]); },
+      compensator, targets.size(),
+      [&](std::size_t i) {
+        return compensator.forPose(targets[i], configs.empty() ? std::nullopt : configs[i]);
+      },
       truth);
 }
 

@@ -195,6 +195,31 @@ TEST_CASE("beyond the work volume: the arm's whole range, predicted and true, si
   CHECK(d.position_mm < 1e-9);
 }
 
+TEST_CASE("accuracy reaches each target in the configuration its file asks for") {
+  const Model nominal = puma560NominalModel();
+  const Compensator comp(nominal, perturbed(4));
+  const PumaIk ik(nominal);
+  // Poses of joint vectors of both shoulders; each judged in the configuration it was drawn in.
+  std::vector<Eigen::Isometry3d> poses;
+  std::vector<std::optional<ArmConfig>> configs;
+  for (const JointsDeg& q : wholeRangeJoints(nominal, 40, 3)) {
+    poses.push_back(comp.nominalToolPose(q));
+    configs.push_back(ik.configOf(q));
+  }
+  REQUIRE(std::count_if(configs.begin(), configs.end(), [](const auto& c) { return c->left; }) > 5);
+  REQUIRE(std::count_if(configs.begin(), configs.end(), [](const auto& c) { return !c->left; }) >
+          5);
+  const AccuracyReport asked = assessAccuracy(comp, poses, nullptr, configs);
+  const AccuracyReport free_choice = assessAccuracy(comp, poses);
+  int differs = 0;
+  for (size_t i = 0; i < poses.size(); ++i) {
+    CHECK(asked.poses[i].target.config == *configs[i]);
+    differs += !(free_choice.poses[i].target.config == *configs[i]);
+  }
+  CHECK(differs > 0);  // without the column, the best configuration is taken instead
+  CHECK_THROWS_AS(assessAccuracy(comp, poses, nullptr, {configs[0]}), std::invalid_argument);
+}
+
 TEST_CASE("a work volume out of the arm's reach is refused, not looped on") {
   const Model nominal = puma560NominalModel();
   const Compensator comp(nominal, nominal);

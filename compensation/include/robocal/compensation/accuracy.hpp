@@ -68,10 +68,13 @@ struct AccuracyReport {
 // Compensates every target pose and gathers the statistics over those solved. `truth`, when
 // given, is the true robot of a simulation: with realism (sim/true_robot.hpp), the arm is judged
 // as it works: warm (the warm-up over), every joint approaching its target in the positive
-// direction, carrying the truth's payload.
+// direction, carrying the truth's payload. `configs`, when not empty, holds one entry a target:
+// the arm configuration it must be reached in (nullopt: the best one), as a targets file's config
+// column.
 AccuracyReport assessAccuracy(const Compensator& compensator,
                               const std::vector<Eigen::Isometry3d>& targets,
-                              const TrueRobot* truth = nullptr);
+                              const TrueRobot* truth = nullptr,
+                              const std::vector<std::optional<ArmConfig>>& configs = {});
 // The same for a program's nominal joints (Compensator::forNominalJoints): each target is the
 // pose the nominal model puts there, in that configuration.
 AccuracyReport assessAccuracyAtJoints(const Compensator& compensator,
