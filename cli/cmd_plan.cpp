@@ -18,6 +18,9 @@
 namespace robocal::cli {
 namespace {
 
+// The whole range's share of an optimal plan's objective (docs/cell-time.md, "Robust plans").
+constexpr double kWholeRangeWeight = 0.1;
+
 constexpr const char* kHelp =
     R"(usage: robocal plan --model M --cell C [--out plan.json] [--check]
                     [--time-budget-min M | --points N] [options]
@@ -46,12 +49,16 @@ points. Every plan's summary ends with its predicted work-volume error and its c
   --time-budget-min M  optimal plan within M minutes of cell time
   --points N       optimal plan of N points
   --noise-mm S     the bar's reading noise for the predicted error            [0.084]
+  --whole-range-weight W  an optimal plan's objective is sqrt(work^2 + W whole^2): the
+                   predicted error in the work volume and over the arm's whole range, so
+                   that the plan stays robust off its volume; 0: the work volume alone  [0.1]
   --quiet          print only the totals, not each shell and dropped point
 )";
 
 int run(const std::vector<std::string>& argv) {
-  const Args args(argv, {"model", "cell", "out", "time-budget-min", "points", "noise-mm"},
-                  {"help", "quiet", "check"});
+  const Args args(
+      argv, {"model", "cell", "out", "time-budget-min", "points", "noise-mm", "whole-range-weight"},
+      {"help", "quiet", "check"});
   if (args.flag("help")) {
     std::fputs(kHelp, stdout);
     return 0;
@@ -67,11 +74,16 @@ int run(const std::vector<std::string>& argv) {
   design.budget_s = 60 * args.number("time-budget-min", 0);
   design.points = static_cast<int>(args.number("points", 0));
   design.noise_sigma_mm = args.number("noise-mm", design.noise_sigma_mm);
-  if (design.budget_s < 0 || design.points < 0 || design.noise_sigma_mm <= 0)
-    throw UsageError("--time-budget-min and --points must be >= 0, --noise-mm > 0");
+  design.whole_range_weight = args.number("whole-range-weight", kWholeRangeWeight);
+  if (design.budget_s < 0 || design.points < 0 || design.noise_sigma_mm <= 0 ||
+      !(design.whole_range_weight >= 0))
+    throw UsageError(
+        "--time-budget-min, --points and --whole-range-weight must be >= 0, --noise-mm > 0");
   const bool optimal = design.budget_s > 0 || design.points > 0;
   if (optimal && check) throw UsageError("--check plans a fixed health check: no budget");
 
+  const std::vector<JointsDeg> whole_joints = wholeRangeJoints(model);
+  design.whole_range_joints = whole_joints;
   const auto t0 = std::chrono::steady_clock::now();
   Plan plan;
   CellConfig cell;
@@ -98,7 +110,6 @@ int run(const std::vector<std::string>& argv) {
   // A calibration plan's accuracy where the user works (a check plan is not fitted).
   const double predicted_mm =
       check ? -1 : predictedWorkVolumeError(model, plan, work_joints, design.noise_sigma_mm);
-  const std::vector<JointsDeg> whole_joints = wholeRangeJoints(model);
   const double whole_mm =
       check ? -1 : predictedWorkVolumeError(model, plan, whole_joints, design.noise_sigma_mm);
   if (std::isfinite(predicted_mm)) {

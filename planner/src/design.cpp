@@ -78,17 +78,24 @@ struct Pick {
 WorkVolumeCriterion::WorkVolumeCriterion(const Model& model, std::vector<int> identified,
                                          const std::vector<JointsDeg>& work_joints,
                                          const Eigen::Vector3d& tool_point_mm,
-                                         double noise_sigma_mm)
+                                         double noise_sigma_mm,
+                                         const std::vector<JointsDeg>& whole_range_joints,
+                                         double whole_range_weight)
     : model_(model), identified_(std::move(identified)), sigma_(noise_sigma_mm) {
   if (work_joints.empty()) throw std::invalid_argument("work volume: no poses");
   if (!(noise_sigma_mm > 0)) throw std::invalid_argument("noise sigma must be > 0 mm");
+  if (!(whole_range_weight >= 0)) throw std::invalid_argument("whole-range weight must be >= 0");
   const int r = size();
   const Kinematics kin(model);
+  const auto jacobians = [&](const std::vector<JointsDeg>& joints) {
+    std::vector<PositionJacobian> g(joints.size());
+    for (size_t k = 0; k < joints.size(); ++k)
+      kin.ballPositionJacobian(joints[k], tool_point_mm, g[k]);
+    return g;
+  };
+  const std::vector<PositionJacobian> g = jacobians(work_joints);
   // Scale each parameter by its typical effect on the tool over the work volume, so that the
   // information matrix is well conditioned whatever the units (mm, rad, gain).
-  std::vector<PositionJacobian> g(work_joints.size());
-  for (size_t k = 0; k < work_joints.size(); ++k)
-    kin.ballPositionJacobian(work_joints[k], tool_point_mm, g[k]);
   scale_ = Eigen::VectorXd::Ones(r);
   for (int a = 0; a < r; ++a) {
     double sum = 0;
@@ -96,13 +103,19 @@ WorkVolumeCriterion::WorkVolumeCriterion(const Model& model, std::vector<int> id
     const double typical = std::sqrt(sum / g.size());
     if (typical > 1e-12) scale_[a] = 1.0 / typical;
   }
-  w_ = Eigen::MatrixXd::Zero(r, r);
-  Eigen::MatrixXd gk(3, r);
-  for (const PositionJacobian& full : g) {
-    for (int a = 0; a < r; ++a) gk.col(a) = full.col(identified_[a]) * scale_[a];
-    w_.noalias() += gk.transpose() * gk;
-  }
-  w_ /= static_cast<double>(g.size());
+  // The mean of G_k^T G_k over poses, in the scaled parameters.
+  const auto meanWeight = [&](const std::vector<PositionJacobian>& poses) {
+    Eigen::MatrixXd w = Eigen::MatrixXd::Zero(r, r);
+    Eigen::MatrixXd gk(3, r);
+    for (const PositionJacobian& full : poses) {
+      for (int a = 0; a < r; ++a) gk.col(a) = full.col(identified_[a]) * scale_[a];
+      w.noalias() += gk.transpose() * gk;
+    }
+    return Eigen::MatrixXd(w / static_cast<double>(poses.size()));
+  };
+  w_ = meanWeight(g);
+  if (whole_range_weight > 0 && !whole_range_joints.empty())
+    w_ += whole_range_weight * meanWeight(jacobians(whole_range_joints));
 }
 
 Eigen::VectorXd WorkVolumeCriterion::row(const Connection& c, const JointsDeg& joints) const {
@@ -350,7 +363,8 @@ Plan planOptimal(const Model& model, const CellConfig& cell,
           makeSample(0, p.connection, p.extension_mm, pt.lat_deg, pt.lon_deg, pt.joints_deg, 0));
   if (all.empty()) throw PlanError("no candidate point on any shell can be reached safely");
   const WorkVolumeCriterion criterion(model, identifiedParameters(model, all), work_joints,
-                                      Eigen::Vector3d::Zero(), options.noise_sigma_mm);
+                                      Eigen::Vector3d::Zero(), options.noise_sigma_mm,
+                                      options.whole_range_joints, options.whole_range_weight);
   const int r = criterion.size();
   parallelFor(pools.size(), [&](size_t s) {
     ShellPool& p = pools[s];

@@ -106,6 +106,33 @@ TEST_CASE("an optimal plan of N points predicts less error than a grid of as man
     CHECK(again.shells[s].steps.size() == optimal.shells[s].steps.size());
 }
 
+TEST_CASE("a robust optimal plan trades a little of the work volume for the whole range",
+          "[design]") {
+  const CellConfig cell = smallCell();
+  DesignOptions options = smallOptions();
+  options.points = 60;
+  const std::vector<JointsDeg> whole = wholeRangeJoints(nominal(), 100);
+  const Plan knife_edge = planOptimal(nominal(), cell, workJoints(), options);
+  options.whole_range_joints = whole;
+  options.whole_range_weight = 0.1;
+  const Plan robust = planOptimal(nominal(), cell, workJoints(), options);
+  const auto predicted = [&](const Plan& plan, const std::vector<JointsDeg>& where) {
+    return predictedWorkVolumeError(nominal(), plan, where, 0.084);
+  };
+  INFO("work volume " << predicted(knife_edge, workJoints()) << " -> "
+                      << predicted(robust, workJoints()) << " mm, whole range "
+                      << predicted(knife_edge, whole) << " -> " << predicted(robust, whole));
+  CHECK(predicted(robust, whole) < 0.9 * predicted(knife_edge, whole));
+  CHECK(predicted(robust, workJoints()) < 1.5 * predicted(knife_edge, workJoints()));
+  CHECK(checkPlan(nominal(), cell, robust).empty());
+  // A weight of 0, or no joint vectors, is the work volume alone: the same plan.
+  options.whole_range_weight = 0;
+  CHECK(predicted(planOptimal(nominal(), cell, workJoints(), options), whole) ==
+        Approx(predicted(knife_edge, whole)));
+  options.whole_range_weight = -1;
+  CHECK_THROWS_AS(planOptimal(nominal(), cell, workJoints(), options), std::invalid_argument);
+}
+
 TEST_CASE("an optimal plan keeps its time budget, swaps included", "[design][heavy]") {
   const CellConfig cell = smallCell();
   DesignOptions options = smallOptions();

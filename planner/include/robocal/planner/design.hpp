@@ -7,6 +7,13 @@
 // covariance is C = sigma^2 (J^T J)^-1 and the objective is sqrt(trace(C W)), W = mean_k
 // G_k^T G_k. Adding a point j changes it by a rank-one update, so a candidate is scored in
 // O(36^2) without refactoring anything. Math only, no I/O.
+//
+// A plan chosen for the work volume alone is a knife-edge: it leaves directions of the parameter
+// space that the work volume does not need almost unmeasured, and beyond the volume (the same box
+// with the other shoulder, other orientations) the calibrated model can be worse than none. So
+// the objective also weighs the arm's whole range: W = W_work + w W_whole, W_whole the same mean
+// over joint vectors drawn within the limits, w the whole-range weight (docs/cell-time.md, "Robust
+// plans": the predicted error is then sqrt(work^2 + w whole^2)).
 #pragma once
 
 #include <robocal/planner/plan.hpp>
@@ -23,6 +30,10 @@ struct DesignOptions {
   int orientations = 3;                          // tool orientations tried per grid point
   int exchange_passes = 2;                       // point-exchange passes after the greedy pick
   double noise_sigma_mm = 0.084;                 // the bar's reading noise (the paper's)
+  // The whole range's share of the objective (above) and its joint vectors; 0 or none: the work
+  // volume alone.
+  double whole_range_weight = 0;
+  std::vector<JointsDeg> whole_range_joints;
 };
 
 // The work-volume objective for one model: the identified parameters, their column scaling and
@@ -32,9 +43,12 @@ class WorkVolumeCriterion {
   // `identified`: the parameters the fit estimates (Identifiability::identified).
   // `work_joints`: the nominal joints of the work volume's poses; `tool_point_mm` in the last
   // link's frame. Throws std::invalid_argument when work_joints is empty.
+  // `whole_range_joints` with `whole_range_weight` > 0 add the whole range's term (above).
   WorkVolumeCriterion(const Model& model, std::vector<int> identified,
                       const std::vector<JointsDeg>& work_joints,
-                      const Eigen::Vector3d& tool_point_mm, double noise_sigma_mm);
+                      const Eigen::Vector3d& tool_point_mm, double noise_sigma_mm,
+                      const std::vector<JointsDeg>& whole_range_joints = {},
+                      double whole_range_weight = 0);
 
   int size() const { return static_cast<int>(identified_.size()); }
   // The scaled, noise-weighted identification row of one bar measurement.
