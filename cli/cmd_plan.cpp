@@ -213,6 +213,14 @@ int run(const std::vector<std::string>& argv) {
         "mm, %zu poses); cell time %.1f min: robot %.1f min, %d bar swaps %.1f min\n",
         predicted_mm, design.noise_sigma_mm, work_joints.size(), sum.cell_time_s / 60.0,
         sum.duration_s / 60.0, sum.shells, sum.swap_time_s / 60.0);
+  if (const CellTimeParts parts = cellTimeParts(plan); parts.points > 0) {
+    const double n = parts.points;
+    std::printf(
+        "cell time a point: %.2f s = dwell %.2f + moves %.2f + stops %.2f (%.1f stops a point: "
+        "the point, its vias and pre-points, %.1f s each) + bar swaps %.2f\n",
+        parts.total_s() / n, parts.dwell_s / n, parts.motion_s / n, parts.stopping_s / n,
+        parts.stops / n, cell.motion.move_overhead_s, parts.swap_s / n);
+  }
   if (!check && std::isfinite(whole_mm) && std::isfinite(predicted_mm) && predicted_mm > 0)
     std::printf(
         "whole range: predicted RMS tool position error %.4f mm after the fit over %zu joint "

@@ -946,6 +946,26 @@ void summarizePlan(Plan& plan) {
   s.cell_time_s = s.duration_s + s.swap_time_s;
 }
 
+CellTimeParts cellTimeParts(const Plan& plan) {
+  const MotionSettings& m = plan.cell.motion;
+  CellTimeParts parts;
+  for (const ShellPlan& shell : plan.shells) {
+    JointsDeg prev = shell.connect.joints_deg;
+    for (const PlanStep& step : shell.steps) {
+      parts.motion_s += (step.joints_deg - prev).cwiseAbs().maxCoeff() / m.joint_speed_deg_per_s;
+      parts.stopping_s += m.move_overhead_s;
+      ++parts.stops;
+      if (step.kind == StepKind::kPoint) {
+        ++parts.points;
+        parts.dwell_s += m.settle_s;
+      }
+      prev = step.joints_deg;
+    }
+  }
+  parts.swap_s = static_cast<double>(plan.shells.size()) * m.swap_s;
+  return parts;
+}
+
 Plan planCell(const Model& model, const CellConfig& cell) {
   const ShellPlanner planner(model, cell);
   Plan plan;

@@ -142,6 +142,14 @@ TEST_CASE("an optimal plan keeps its time budget, swaps included", "[design][hea
   CHECK(plan.summary.cell_time_s > 0.6 * options.budget_s);  // and uses most of it
   CHECK(plan.summary.swap_time_s == Approx(plan.summary.shells * cell.motion.swap_s));
   CHECK(plan.summary.cell_time_s == Approx(plan.summary.duration_s + plan.summary.swap_time_s));
+  // Its parts, as robocal plan prints them a point: they add up to the same cell time.
+  const CellTimeParts parts = cellTimeParts(plan);
+  CHECK(parts.total_s() == Approx(plan.summary.cell_time_s));
+  CHECK(parts.points == plan.summary.points);
+  CHECK(parts.stops == plan.summary.points + plan.summary.vias);
+  CHECK(parts.dwell_s == Approx(plan.summary.points * cell.motion.settle_s));
+  CHECK(parts.swap_s == Approx(plan.summary.swap_time_s));
+  CHECK(parts.motion_s > 0);
   CHECK(plan.summary.rank == 36);
   CHECK(checkPlan(nominal(), cell, plan).empty());
   // A longer budget buys a smaller error.

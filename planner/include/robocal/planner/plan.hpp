@@ -279,4 +279,18 @@ void predictDeflections(const Model& nominal, const std::vector<Model>& truths, 
 // Fills the plan summary's totals from its shells (not rank or deflection).
 void summarizePlan(Plan& plan);
 
+// Where a plan's cell time goes (the motion model of summary.duration_s: each move at the cell's
+// joint speed plus move_overhead_s, a stop; settle_s at each point; swap_s a shell). The parts
+// add up to summary.cell_time_s.
+struct CellTimeParts {
+  int points = 0;
+  int stops = 0;          // moves that end in a stop: points, vias and pre-points
+  double dwell_s = 0;     // settle_s at every point
+  double motion_s = 0;    // the moves themselves, at the joint speed
+  double stopping_s = 0;  // move_overhead_s per stop
+  double swap_s = 0;      // the operator's bar swaps
+  double total_s() const { return dwell_s + motion_s + stopping_s + swap_s; }
+};
+CellTimeParts cellTimeParts(const Plan& plan);
+
 }  // namespace robocal
