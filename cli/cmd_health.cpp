@@ -19,19 +19,20 @@ constexpr const char* kHelp =
 
 Judges whether the calibrated model in use still fits the robot, from the samples of a health
 check (robocal plan --check; docs/health-check.md). The samples are predicted by the model
-without refitting; their RMS over the reference level gives the verdict: PASS below
---warn-ratio, WARN from it, FAIL from --fail-ratio. The reference is --baseline-mm when given
-(the RMS of the same check right after the calibration), else the RMS the model's own fit
-reached (its provenance), else --fallback-mm. A small prior-weighted refit from the model then
-names what moved, e.g. "J2.offset +0.0500 deg".
+without refitting; a small prior-weighted refit from the model names what moved, e.g.
+"J2.offset +0.0500 deg", judged at the reference level or at the check's own noise when its
+readings are noisier (a noisier day is not a change). Anything named: FAIL. Nothing named: the
+RMS over the reference gives PASS below --warn-ratio, WARN from it, FAIL from --fail-ratio.
+The reference is --baseline-mm when given (the RMS of the same check right after the
+calibration), else the RMS the model's own fit reached (its provenance), else --fallback-mm.
 
   --model FILE         the calibrated model in use (model format)                 required
   --json               one JSON object instead of text
   --baseline-mm R      reference RMS: a check run right after the calibration
   --fallback-mm R      reference RMS when the model has no provenance              [0.084]
-  --warn-ratio K       WARN from this RMS ratio                                    [1.3]
-  --fail-ratio K       FAIL from this RMS ratio                                    [1.5]
-  --significance Z     name a parameter when it explains Z sigma of the residuals  [4]
+  --warn-ratio K       WARN from this RMS ratio when nothing is named              [2.5]
+  --fail-ratio K       FAIL from this RMS ratio when nothing is named              [3]
+  --significance Z     name a parameter when it explains Z sigma of the residuals  [3.5]
 
 exit status: 0 PASS, 4 WARN, 5 FAIL, 1 an unreadable input, 2 a usage error
 )";

@@ -32,8 +32,9 @@ points, the identification rank and condition number, and the bar deflection for
 cell's model_uncertainty.
 
 With --check, plans the health check of the calibrated cell instead (docs/health-check.md):
-three connections that use every ball and every chuck, one extension between the cell's, a
-coarse grid; about 10 minutes with the operator's steps. Give the calibrated model in use as
+two connections, one extension between the cell's, 30 points chosen where the changes it must
+see (0.02 deg on joints 1-3, 0.05 deg on 4-6, 0.1 mm on a link) move the bar most; about 5
+minutes with the operator's steps. Give the calibrated model in use as
 --model, and the calibration's cell.
 
 With --time-budget-min or --points, plans an optimal calibration instead of the cell's grid
@@ -170,6 +171,10 @@ int run(const std::vector<std::string>& argv) {
         "%d connections: about %.0f min in all\n",
         sum.duration_s / 60.0, cell.motion.joint_speed_deg_per_s, cell.motion.settle_s, sum.shells,
         sum.duration_s / 60.0 + sum.shells * kHealthCheckOperatorMinPerShell);
+    std::printf(
+        "check design: points where %g deg on joints 1-3, %g deg on joints 4-6 and %g mm on a "
+        "link move the bar most (a check is judged, not fitted: its rank does not matter)\n",
+        kHealthCheckJoint13Deg, kHealthCheckJoint46Deg, kHealthCheckTranslationMm);
   }
   std::printf(
       "plan: %d shells, %d points, %d vias, %d grid points dropped; about %.1f %s at %.0f "
@@ -199,7 +204,7 @@ int run(const std::vector<std::string>& argv) {
         "connect pose (range +/-%.2f mm)\n",
         u.translation_sigma_mm, u.link_angle_sigma_deg, u.joint_offset_sigma_deg, u.gain_sigma,
         u.models, sum.predicted_deflection_mm, sum.predicted_change_mm, cell.bar.max_deflection_mm);
-  if (plan.summary.rank < plan.summary.expected_rank)
+  if (!check && plan.summary.rank < plan.summary.expected_rank)
     std::printf("warning: the plan identifies only %d of the %d independent parameters\n",
                 plan.summary.rank, plan.summary.expected_rank);
   if (sum.predicted_change_mm > cell.bar.max_deflection_mm)

@@ -77,6 +77,10 @@ std::string healthVerdictText(const HealthVerdict& v) {
       fmt("ratio: %.2f (an unchanged robot's scatters by +/-%.2f); warn from %.2f, fail from "
           "%.2f\n",
           v.rms_ratio, v.ratio_scatter, v.warn_ratio, v.fail_ratio);
+  out +=
+      fmt("changes judged at a noise of %.4f mm (the check's own level %.4f mm, after what "
+          "it names)\n",
+          v.noise_mm, v.check_level_mm);
   out += "residual per shell:\n";
   out += "  shell  connection        n   RMS (mm)   max (mm)  mean (mm)  RMS/median\n";
   for (const ShellResiduals& s : v.shells.shells) {
@@ -134,6 +138,8 @@ ordered_json healthVerdictJson(const HealthVerdict& v) {
   out["ratio_scatter"] = v.ratio_scatter;
   out["warn_ratio"] = v.warn_ratio;
   out["fail_ratio"] = v.fail_ratio;
+  out["noise_mm"] = v.noise_mm;
+  out["check_level_mm"] = v.check_level_mm;
   ordered_json moved = ordered_json::array();
   for (const ParameterChange& c : v.moved) {
     ordered_json m;

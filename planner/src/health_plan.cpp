@@ -1,5 +1,10 @@
 #include <robocal/planner/health_plan.hpp>
 
+#include <robocal/kinematics/kinematics.hpp>
+#include <robocal/kinematics/units.hpp>
+#include <robocal/planner/design.hpp>
+
+#include <Eigen/Core>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -43,17 +48,123 @@ std::vector<Connection> healthCheckConnections(const std::vector<Connection>& ca
 CellConfig healthCheckCell(const CellConfig& calibration) {
   CellConfig cell = calibration;
   cell.connections = healthCheckConnections(calibration.connections);
+  cell.connections.resize(kHealthCheckShells);
   cell.bar.extension_lengths_mm = {healthCheckExtension(calibration.bar)};
-  cell.grid.latitude_first_deg = kHealthCheckLatitudeFirstDeg;
-  cell.grid.latitude_last_deg = kHealthCheckLatitudeLastDeg;
-  cell.grid.latitude_step_deg = kHealthCheckLatitudeStepDeg;
-  cell.grid.longitude_step_deg = kHealthCheckLongitudeStepDeg;
+  GridSettings grid = kHealthCheckCandidateGrid;
+  grid.longitude_first_deg = calibration.grid.longitude_first_deg;
+  cell.grid = grid;
   if (!calibration.name.empty()) cell.name = calibration.name + ", health check";
   return cell;
 }
 
+namespace {
+
+// The change each parameter must be seen at, over the noise (ParamVector units per mm); 0 for
+// the parameters the check is not designed for (link angles, gains).
+Eigen::Matrix<double, kParamCount, 1> detectionTargets() {
+  constexpr double kNoiseMm = 0.084;  // the paper's; the design does not depend on its size
+  Eigen::Matrix<double, kParamCount, 1> d = Eigen::Matrix<double, kParamCount, 1>::Zero();
+  for (int link = 0; link < kLinkCount; ++link)
+    for (int axis = 0; axis < 3; ++axis)
+      d[linkParamIndex(link) + axis] = kHealthCheckTranslationMm / kNoiseMm;
+  for (int joint = 0; joint < kJointCount; ++joint)
+    d[jointParamIndex(joint)] =
+        degToRad(joint < 3 ? kHealthCheckJoint13Deg : kHealthCheckJoint46Deg) / kNoiseMm;
+  return d;
+}
+
+}  // namespace
+
 Plan planHealthCheck(const Model& model, const CellConfig& calibration) {
-  Plan plan = planCell(model, healthCheckCell(calibration));
+  const CellConfig cell = healthCheckCell(calibration);
+  const ShellPlanner planner(model, cell);
+  const Kinematics kin(model);
+  const Eigen::Matrix<double, kParamCount, 1> targets = detectionTargets();
+  const double extension_mm = cell.bar.extension_lengths_mm.front();
+
+  // Each candidate's contribution to every parameter's noncentrality, (dL/dp_k d_k / sigma)^2.
+  struct Pool {
+    ShellCandidates candidates;
+    Eigen::MatrixXd signal;  // kParamCount x candidates
+    std::vector<char> chosen;
+  };
+  std::vector<Pool> pools(cell.connections.size());
+  for (size_t s = 0; s < pools.size(); ++s) {
+    const Connection& c = cell.connections[s];
+    Pool& pool = pools[s];
+    pool.candidates = planner.candidatePoints(c, extension_mm, cell.grid, kHealthCheckOrientations);
+    const size_t n = pool.candidates.points.size();
+    if (n == 0)
+      throw PlanError("the health check's shell " + connectionName(c) +
+                      " has no point that can be reached safely");
+    pool.signal.resize(kParamCount, static_cast<Eigen::Index>(n));
+    ParamRow gradient;
+    for (size_t i = 0; i < n; ++i) {
+      kin.barLengthGradient(pool.candidates.points[i].joints_deg, model.balls_mm[c.ball_index],
+                            model.chucks_mm[c.chuck_index], gradient);
+      pool.signal.col(static_cast<Eigen::Index>(i)) =
+          (gradient.transpose().array() * targets.array()).square().matrix();
+    }
+    pool.chosen.assign(n, 0);
+  }
+
+  // Greedy: the points that raise sum_k log(1 + S_k) most per second of robot time (the dwell
+  // and the move from the nearest point already chosen on the shell, from the connect pose at
+  // first), the shells in turn so that each gets its share.
+  const MotionSettings& motion = cell.motion;
+  auto travel_s = [&](const JointsDeg& a, const JointsDeg& b) {
+    return (b - a).cwiseAbs().maxCoeff() / motion.joint_speed_deg_per_s;
+  };
+  std::vector<std::vector<double>> nearest_s(pools.size());
+  for (size_t s = 0; s < pools.size(); ++s) {
+    const ShellCandidates& c = pools[s].candidates;
+    for (const ShellPoint& p : c.points)
+      nearest_s[s].push_back(c.connect ? travel_s(c.connect->joints_deg, p.joints_deg) : 0.0);
+  }
+  Eigen::Matrix<double, kParamCount, 1> noncentrality =
+      Eigen::Matrix<double, kParamCount, 1>::Zero();
+  const int per_shell = kHealthCheckPoints / static_cast<int>(pools.size());
+  for (int round = 0; round < per_shell; ++round)
+    for (size_t s = 0; s < pools.size(); ++s) {
+      Pool& pool = pools[s];
+      const Eigen::ArrayXd base = (1.0 + noncentrality.array()).log();
+      Eigen::Index best = -1;
+      double best_gain = -1;
+      for (Eigen::Index i = 0; i < pool.signal.cols(); ++i) {
+        if (pool.chosen[static_cast<size_t>(i)]) continue;
+        const double gain =
+            ((1.0 + noncentrality.array() + pool.signal.col(i).array()).log() - base).sum() /
+            (motion.settle_s + motion.move_overhead_s + nearest_s[s][static_cast<size_t>(i)]);
+        if (gain > best_gain) {
+          best_gain = gain;
+          best = i;
+        }
+      }
+      if (best < 0) continue;  // the shell has fewer candidates than its share
+      pool.chosen[static_cast<size_t>(best)] = 1;
+      noncentrality += pool.signal.col(best);
+      const JointsDeg& q = pool.candidates.points[static_cast<size_t>(best)].joints_deg;
+      for (size_t i = 0; i < pool.candidates.points.size(); ++i)
+        nearest_s[s][i] =
+            std::min(nearest_s[s][i], travel_s(q, pool.candidates.points[i].joints_deg));
+    }
+
+  Plan plan;
+  plan.model_name = model.name;
+  plan.cell = cell;
+  for (size_t s = 0; s < pools.size(); ++s) {
+    const ShellCandidates& c = pools[s].candidates;
+    std::vector<ShellPoint> points;
+    for (size_t i = 0; i < c.points.size(); ++i)
+      if (pools[s].chosen[i]) points.push_back(c.points[i]);
+    const JointsDeg start = c.connect ? c.connect->joints_deg : points.front().joints_deg;
+    std::vector<ShellPoint> ordered;
+    for (size_t k : shortTour(planner, start, points)) ordered.push_back(points[k]);
+    plan.shells.push_back(planner.joinPoints(cell.connections[s], extension_mm,
+                                             static_cast<int>(s) + 1, c.config, c.connect,
+                                             std::move(ordered)));
+  }
+  summarizePlan(plan);
   plan.purpose = PlanPurpose::kCheck;
   summarizeIdentifiability(model, plan);
   return plan;

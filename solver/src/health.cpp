@@ -2,6 +2,7 @@
 
 #include <robocal/solver/problem.hpp>
 
+#include <Eigen/Cholesky>
 #include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
@@ -33,6 +34,8 @@ void checkOptions(const HealthOptions& o) {
   positive("prior_joint_offset_deg", o.prior_joint_offset_deg);
   positive("prior_gain", o.prior_gain);
   positive("significance", o.significance);
+  if (!(o.alternative_chi2 >= 0) || !std::isfinite(o.alternative_chi2))
+    throw std::invalid_argument("health options: alternative_chi2 must be 0 or more");
   if (!(o.equivalent_cosine > 0 && o.equivalent_cosine <= 1))
     throw std::invalid_argument("health options: equivalent_cosine must be in (0, 1]");
   if (o.max_iterations < 1)
@@ -40,29 +43,50 @@ void checkOptions(const HealthOptions& o) {
 }
 
 // The small refit: forward selection of the parameters that explain the residuals, each refitted
-// with the prior from the active model (docs/health-check.md, "What moved").
-void nameWhatMoved(const Model& active, const std::vector<Sample>& samples,
-                   const HealthOptions& options, HealthVerdict& v) {
+// with the prior from the active model, at the noise level `noise` (docs/health-check.md, "What
+// moved").
+struct Named {
+  std::vector<int> selected;
+  // For each selected one, the others whose one-parameter step explained the residual nearly as
+  // well at its turn (score within HealthOptions::alternative_chi2): the data cannot tell them
+  // apart.
+  std::vector<std::vector<int>> alternatives;
+  SolveResult fit;      // of the selected ones (empty when none)
+  Eigen::VectorXd r;    // the residuals after it
+  Eigen::MatrixXd jac;  // and their Jacobian
+  double rms_mm = 0;    // RMS of r
+};
+
+Named selectMoved(const Model& active, const std::vector<Sample>& samples,
+                  const HealthOptions& options, double noise) {
   // solveCalibration weighs a sample's residual (mm) as one unit against a prior row
   // (start - p) / prior_sigma; dividing the prior sigmas by the noise level (mm) makes its cost
   // noise^2 times sum (r / noise)^2 + sum ((p - start) / prior)^2, the proper posterior.
-  const double noise = v.reference_rms_mm;
   const ParamVector prior = paramSigmas(options.prior_translation_mm, options.prior_link_angle_deg,
                                         options.prior_joint_offset_deg, options.prior_gain);
   SolveOptions solve;
   solve.prior_sigma = prior / noise;
   solve.max_iterations = options.max_iterations;
 
-  const ParamVector start = toParams(active);
-  std::vector<int> selected;
-  SolveResult fit;
-  Eigen::VectorXd r;
-  Eigen::MatrixXd jac;
-  evaluateProblem(active, start, samples, r, &jac);
-  v.refit_rms_mm = v.residuals.rms_mm;
-  const Eigen::VectorXd column_norm = jac.colwise().norm().transpose();
+  Named out;
+  evaluateProblem(active, toParams(active), samples, out.r, &out.jac);
+  out.rms_mm = std::sqrt(out.r.squaredNorm() / static_cast<double>(out.r.size()));
+  const Eigen::VectorXd column_norm = out.jac.colwise().norm().transpose();
   const double min_score = options.significance * options.significance;
+  // The active model is itself uncertain (its covariance C): on an unchanged robot the residuals
+  // scatter as noise^2 (I + J C J^T / noise^2), not as white noise, and the calibration's own
+  // error at the check's poses must not be named as a change. The test runs on residuals and
+  // columns whitened by L^-1, L L^T = I + J C J^T / noise^2 (identity without a covariance).
+  const Eigen::Index n = out.jac.rows();
+  Eigen::LLT<Eigen::MatrixXd> whitening(Eigen::MatrixXd::Identity(n, n));
+  if (active.covariance && active.covariance->rows() == kParamCount &&
+      active.covariance->cols() == kParamCount)
+    whitening.compute(Eigen::MatrixXd::Identity(n, n) +
+                      out.jac * *active.covariance * out.jac.transpose() / (noise * noise));
+  std::vector<int>& selected = out.selected;
   while (static_cast<int>(selected.size()) < options.max_named) {
+    const Eigen::MatrixXd jac = whitening.matrixL().solve(out.jac);
+    const Eigen::VectorXd r = whitening.matrixL().solve(out.r);
     // An orthonormal basis of the chosen columns, and what of r and of each other column lies
     // outside their span.
     Eigen::MatrixXd q(jac.rows(), 0);
@@ -77,36 +101,53 @@ void nameWhatMoved(const Model& active, const std::vector<Sample>& samples,
     // The chi^2 a one-parameter prior-weighted step along each column would remove.
     int best = -1;
     double best_score = 0;
+    Eigen::VectorXd scores = Eigen::VectorXd::Zero(kParamCount);
     for (int i = 0; i < kParamCount; ++i) {
       if (std::find(selected.begin(), selected.end(), i) != selected.end()) continue;
       const Eigen::VectorXd col = jac.col(i) - q * (q.transpose() * jac.col(i));
       if (col.norm() <= 1e-6 * column_norm[i]) continue;  // nothing new: same as the chosen
       const double along = col.dot(rest);
-      const double score =
+      scores[i] =
           along * along / (col.squaredNorm() + std::pow(noise / prior[i], 2)) / (noise * noise);
-      if (score > best_score) {
-        best_score = score;
+      if (scores[i] > best_score) {
+        best_score = scores[i];
         best = i;
       }
     }
     if (best < 0 || best_score < min_score) break;
     selected.push_back(best);
+    std::vector<int> close;
+    for (int i = 0; i < kParamCount; ++i)
+      if (i != best && scores[i] > 0 && scores[i] >= best_score - options.alternative_chi2)
+        close.push_back(i);
+    out.alternatives.push_back(std::move(close));
     solve.fixed.clear();
     for (int i = 0; i < kParamCount; ++i)
       if (std::find(selected.begin(), selected.end(), i) == selected.end())
         solve.fixed.push_back(i);
-    fit = solveCalibration(active, samples, solve);
-    v.refit_rms_mm = fit.after.rms_mm;
-    evaluateProblem(active, fit.params, samples, r, &jac);
+    out.fit = solveCalibration(active, samples, solve);
+    out.rms_mm = out.fit.after.rms_mm;
+    evaluateProblem(active, out.fit.params, samples, out.r, &out.jac);
   }
-  if (selected.empty()) return;
+  return out;
+}
 
+// The named changes of `named`, most significant first, with the data's equivalents.
+void describeMoved(const Model& active, const HealthOptions& options, const Named& named,
+                   double noise, HealthVerdict& v) {
+  if (named.selected.empty()) return;
+  const ParamVector prior = paramSigmas(options.prior_translation_mm, options.prior_link_angle_deg,
+                                        options.prior_joint_offset_deg, options.prior_gain);
+  const ParamVector start = toParams(active);
+  const SolveResult& fit = named.fit;
+  const Eigen::MatrixXd& jac = named.jac;
   // The covariance solveCalibration reports is s^2 (J^T J + noise^2 / prior^2)^-1 with s the
   // refit's RMS; the posterior takes the noise level, or that RMS when it is larger (residuals the
   // refit cannot explain make every change less certain).
   const double sigma = std::max(noise, fit.sigma_mm);
   const double scale = fit.sigma_mm > 0 ? std::pow(sigma / fit.sigma_mm, 2) : 1.0;
-  for (int i : selected) {
+  for (size_t n = 0; n < named.selected.size(); ++n) {
+    const int i = named.selected[n];
     ParamVector unit = ParamVector::Zero();
     unit[i] = 1;
     const double to_interface = paramInterfaceValue(unit, i);  // 1, or deg per rad
@@ -121,9 +162,12 @@ void nameWhatMoved(const Model& active, const std::vector<Sample>& samples,
     c.prior_ratio = std::abs(c.change) / c.prior_sigma;
     c.text = parameterChangeText(i, c.change);
     for (int k = 0; k < kParamCount; ++k) {
-      if (k == i || column_norm[i] == 0 || column_norm[k] == 0) continue;
-      const double cosine = jac.col(i).dot(jac.col(k)) / (jac.col(i).norm() * jac.col(k).norm());
-      if (std::abs(cosine) >= options.equivalent_cosine) c.equivalent.push_back(paramName(k));
+      const double norms = jac.col(i).norm() * jac.col(k).norm();
+      if (k == i || norms == 0) continue;
+      const bool alternative = std::find(named.alternatives[n].begin(), named.alternatives[n].end(),
+                                         k) != named.alternatives[n].end();
+      if (alternative || std::abs(jac.col(i).dot(jac.col(k))) / norms >= options.equivalent_cosine)
+        c.equivalent.push_back(paramName(k));
     }
     v.moved.push_back(std::move(c));
   }
@@ -131,6 +175,27 @@ void nameWhatMoved(const Model& active, const std::vector<Sample>& samples,
                    [](const ParameterChange& a, const ParameterChange& b) {
                      return a.significance > b.significance;
                    });
+}
+
+// Names what moved at the reference level, then at the check's own level when that is higher
+// (the residual left after the named ones, per degree of freedom): a noisier day raises the
+// level the changes are judged at, not the number of changes named.
+void nameWhatMoved(const Model& active, const std::vector<Sample>& samples,
+                   const HealthOptions& options, HealthVerdict& v) {
+  const auto ownLevel = [&](const Named& n) {
+    const double dof = static_cast<double>(samples.size() - n.selected.size());
+    return dof > 0 ? n.rms_mm * std::sqrt(static_cast<double>(samples.size()) / dof) : n.rms_mm;
+  };
+  double noise = v.reference_rms_mm;
+  Named named = selectMoved(active, samples, options, noise);
+  for (int pass = 0; pass < 3 && ownLevel(named) > noise * 1.001; ++pass) {
+    noise = ownLevel(named);
+    named = selectMoved(active, samples, options, noise);
+  }
+  v.noise_mm = noise;
+  v.check_level_mm = ownLevel(named);
+  v.refit_rms_mm = named.rms_mm;
+  describeMoved(active, options, named, noise, v);
 }
 
 }  // namespace
@@ -206,6 +271,7 @@ HealthVerdict assessHealth(const Model& active, const std::vector<Sample>& check
   v.warn_ratio = options.warn_ratio;
   v.fail_ratio = options.fail_ratio;
 
+  v.refit_rms_mm = v.residuals.rms_mm;
   nameWhatMoved(active, check_samples, options, v);
   v.refit_ratio = v.refit_rms_mm / v.reference_rms_mm;
 
@@ -215,24 +281,42 @@ HealthVerdict assessHealth(const Model& active, const std::vector<Sample>& check
        : v.reference == HealthReference::kCalibration ? "the calibration's fit RMS"
                                                       : "the fallback reference") +
       fmt(" of %.4f mm", v.reference_rms_mm);
+  std::string moved;
+  for (const ParameterChange& c : v.moved)
+    moved += (moved.empty() ? "" : ", ") + c.text + fmt(" (%.1f sigma)", c.significance);
+  // A check noisier than the calibration (its own level above the reference) sees less.
+  const double noise_ratio = v.noise_mm / v.reference_rms_mm;
+  const std::string noisier =
+      noise_ratio >= 1.2 ? fmt("; the readings were %.2f times noisier than the reference, so "
+                               "smaller changes could go unseen",
+                               noise_ratio)
+                         : std::string();
   if (static_cast<int>(v.samples) < options.min_samples) {
     v.status = HealthStatus::kWarn;
     v.reason =
         fmt("%.0f samples are too few to judge (at least %.0f): ", static_cast<double>(v.samples),
             options.min_samples) +
         level;
+  } else if (!v.moved.empty()) {
+    v.status = HealthStatus::kFail;
+    v.reason = "the robot moved: " + moved + "; " + level +
+               ": the model no longer fits the robot; recalibrate";
   } else if (v.rms_ratio >= options.fail_ratio) {
     v.status = HealthStatus::kFail;
-    v.reason = level + fmt(", at or above %.2f: the model no longer fits the robot; recalibrate",
+    v.reason = level + fmt(", at or above %.2f, and no few parameters explain it: the model no "
+                           "longer fits the robot (or the bar is not seated: check it first); "
+                           "recalibrate",
                            options.fail_ratio);
   } else if (v.rms_ratio >= options.warn_ratio) {
     v.status = HealthStatus::kWarn;
-    v.reason = level + fmt(", at or above %.2f (fail from %.2f): the robot may have changed; "
-                           "check again, recalibrate if it persists",
+    v.reason = level + fmt(", at or above %.2f (fail from %.2f), and nothing the check can name "
+                           "moved: noisier readings or a change spread over many parameters; "
+                           "check the bar's seating and the chucks, and run the check again",
                            options.warn_ratio, options.fail_ratio);
   } else {
     v.status = HealthStatus::kPass;
-    v.reason = level + fmt(", below %.2f: the model still fits the robot", options.warn_ratio);
+    v.reason = "nothing the check can name moved; " + level +
+               fmt(", below %.2f: the model still fits the robot", options.warn_ratio) + noisier;
   }
   return v;
 }

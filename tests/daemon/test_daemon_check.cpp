@@ -8,6 +8,7 @@
 
 #include <robocal/daemon/model_store.hpp>
 #include <robocal/formats/model_json.hpp>
+#include <robocal/planner/health_plan.hpp>
 
 using namespace robocal;
 using namespace robocal::test;
@@ -81,9 +82,9 @@ TEST_CASE(
   INFO(pass.dump(1));
   CHECK(pass["status"] == "pass");
   CHECK(pass["model_version"] == 1);
-  CHECK(pass["verdict"]["samples"].get<int>() >= 40);
+  CHECK(pass["verdict"]["samples"].get<int>() >= kHealthCheckPoints - 2);
   CHECK(pass["verdict"]["extensions_mm"] == json::array({75.0}));
-  CHECK(pass["verdict"]["connections"].size() == 3);
+  CHECK(pass["verdict"]["connections"].size() == kHealthCheckShells);
   const std::string run = pass["run"];
   CHECK(json::parse(readTextFile(cell.runDir(run) + "/check.json")) == pass);
   CHECK_THAT(readTextFile(cell.runDir(run) + "/events.jsonl"), Contains("\"health_check\""));

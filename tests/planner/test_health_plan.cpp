@@ -6,6 +6,7 @@
 
 #include <robocal/formats/model_json.hpp>
 #include <robocal/kinematics/kinematics.hpp>
+#include <robocal/kinematics/units.hpp>
 #include <robocal/planner/cell_json.hpp>
 #include <robocal/planner/check.hpp>
 #include <robocal/planner/health_plan.hpp>
@@ -15,6 +16,8 @@
 #include <robocal/solver/health.hpp>
 
 #include <unistd.h>
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -109,10 +112,11 @@ TEST_CASE("the check's connections use every ball and every chuck, from the cell
 
 TEST_CASE("the check cell keeps the calibration's bar, tool, margins and motion") {
   const CellConfig cell = healthCheckCell(defaultCell());
-  CHECK(connectionList(cell.connections) == "B1C2,B2C3,B3C1");
+  CHECK(connectionList(cell.connections) == "B1C2,B2C3");  // the first two of the three
   REQUIRE(cell.bar.extension_lengths_mm.size() == 1);
   CHECK(cell.bar.extension_lengths_mm[0] == 75.0);
-  CHECK(gridLatitudes(cell.grid).size() * gridLongitudes(cell.grid).size() == 24);
+  // The candidates' grid: 8 latitudes, 18 longitudes.
+  CHECK(gridLatitudes(cell.grid).size() * gridLongitudes(cell.grid).size() == 144);
   CHECK(cell.bar.nominal_length_mm == defaultCell().bar.nominal_length_mm);
   CHECK(cell.motion.settle_s == defaultCell().motion.settle_s);
   CHECK(cell.margins.table_clearance_mm == defaultCell().margins.table_clearance_mm);
@@ -120,25 +124,52 @@ TEST_CASE("the check cell keeps the calibration's bar, tool, margins and motion"
   CHECK_NOTHROW(validateCell(cell));
 }
 
-TEST_CASE("the check plan: three shells at 75 mm, about 7 minutes of robot time, rank 36") {
+TEST_CASE("the check plan: 30 points on two shells at 75 mm, about 5 minutes in all") {
   const Plan& plan = checkPlanOfDefaultCell();
   CHECK(plan.purpose == PlanPurpose::kCheck);
-  REQUIRE(plan.shells.size() == 3);
-  CHECK(connectionsOf(plan) == "B1C2,B2C3,B3C1");
+  REQUIRE(plan.shells.size() == kHealthCheckShells);
+  CHECK(connectionsOf(plan) == "B1C2,B2C3");
   for (const ShellPlan& s : plan.shells) {
     INFO("shell " << s.shell);
     CHECK(s.extension_mm == 75.0);
     CHECK(s.radius_mm == 225.0);
-    CHECK(s.summary.points >= 20);
+    CHECK(s.summary.points == kHealthCheckPoints / kHealthCheckShells);
+    CHECK(s.dropped.empty());
   }
-  CHECK(plan.summary.points >= 66);
-  CHECK(plan.summary.points <= 72);
-  // The planner's own estimate; with a minute of the operator's per shell about 10 minutes.
+  // The planner's own estimate, with a minute of the operator's per shell.
   const double minutes = plan.summary.duration_s / 60;
-  CHECK(minutes > 6);
-  CHECK(minutes < 8);
-  CHECK(minutes + 3 * kHealthCheckOperatorMinPerShell == Approx(10).margin(1));
-  CHECK(plan.summary.rank == 36);
+  CHECK(minutes + kHealthCheckShells * kHealthCheckOperatorMinPerShell <= 5.5);
+}
+
+TEST_CASE("the check's points are where the changes it must see move the bar most") {
+  // Against the same number of points of the old coarse grid (latitudes 30 and 70, longitudes
+  // every 30 deg) on the same shells: the weakest parameter's signal is larger.
+  const Plan& designed = checkPlanOfDefaultCell();
+  CellConfig grid_cell = healthCheckCell(defaultCell());
+  grid_cell.grid = {30, 70, 40, 0, 60};  // 2 x 6 = 12 a shell
+  const Plan grid = planCell(nominal(), grid_cell);
+  auto weakest = [](const Plan& plan) {
+    const Kinematics kin(nominal());
+    Eigen::Matrix<double, kParamCount, 1> s = Eigen::Matrix<double, kParamCount, 1>::Zero();
+    ParamRow g;
+    for (const Sample& x : planSamples(nominal(), plan)) {
+      kin.barLengthGradient(x.joints_deg, nominal().balls_mm[x.ball_index],
+                            nominal().chucks_mm[x.chuck_index], g);
+      s += g.transpose().cwiseAbs2();
+    }
+    // The bar's change squared for each change the check is designed for, the least of them.
+    double least = 1e300;
+    for (int j = 0; j < kJointCount; ++j)
+      least = std::min(
+          least,
+          s[jointParamIndex(j)] *
+              std::pow(degToRad(j < 3 ? kHealthCheckJoint13Deg : kHealthCheckJoint46Deg), 2));
+    for (int l = 0; l < kLinkCount; ++l)
+      for (int a = 0; a < 3; ++a)
+        least = std::min(least, s[linkParamIndex(l) + a] * std::pow(kHealthCheckTranslationMm, 2));
+    return least / plan.summary.points;
+  };
+  CHECK(weakest(designed) > 1.2 * weakest(grid));
 }
 
 TEST_CASE("check-plan accepts the check plan against the calibration's cell and its own") {
@@ -150,7 +181,7 @@ TEST_CASE("check-plan accepts the check plan against the calibration's cell and 
   Plan as_calibration = plan;
   as_calibration.purpose = PlanPurpose::kCalibration;
   const auto v = checkPlan(nominal(), defaultCell(), as_calibration);
-  REQUIRE(v.size() == 3);
+  REQUIRE(v.size() == kHealthCheckShells);
   CHECK(v[0].rule == "extension");
   // Nor may a check plan use any other extension.
   Plan other = plan;
@@ -229,12 +260,12 @@ TEST_CASE("robocal plan --check writes the check plan and check-plan accepts it"
       runCommand(robocalBinary() + " plan --check --quiet" + args + "--out " + path, out);
   INFO(out);
   REQUIRE(status == 0);
-  CHECK_THAT(out, Catch::Contains("check plan: ") && Catch::Contains("points on 3 shells") &&
-                      Catch::Contains("B1C2,B2C3,B3C1") && Catch::Contains("extension 75 mm") &&
+  CHECK_THAT(out, Catch::Contains("check plan: ") && Catch::Contains("points on 2 shells") &&
+                      Catch::Contains("B1C2,B2C3)") && Catch::Contains("extension 75 mm") &&
                       Catch::Contains("min of robot time"));
   const Plan plan = loadPlanFile(path);
   CHECK(plan.purpose == PlanPurpose::kCheck);
-  CHECK(plan.shells.size() == 3);
+  CHECK(plan.shells.size() == 2);
   CHECK(runCommand(robocalBinary() + " check-plan" + args + path, out) == 0);
   CHECK_THAT(out, Catch::Contains("OK"));
   CHECK_THAT(out, !Catch::Contains("other settings"));

@@ -1,8 +1,9 @@
 // The health check's verdict (solver/health.hpp, docs/health-check.md): a calibrated model of a
-// simulated robot, then check samples on shells like the check plan's (three connections that use
-// every ball and chuck, the 75 mm extension between the calibration's 0 and 150 mm, 24 grid
-// points a shell) of the unchanged robot, of the robot with a joint offset moved by 0.05 deg, and
-// with a link moved by 0.2 mm.
+// simulated robot, then check samples on three grid shells at the check's extension (the three
+// connections that use every ball and chuck, 75 mm between the calibration's 0 and 150 mm, 24
+// grid points a shell: the verdict takes any samples; tests/planner/test_health_sweep.cpp judges
+// the designed check plan's own points) of the unchanged robot, of the robot with a joint offset
+// moved by 0.05 deg, and with a link moved by 0.2 mm.
 #include <catch2/catch.hpp>
 
 #include <robocal/formats/health_report.hpp>
@@ -69,6 +70,7 @@ Model calibrate(const Model& truth, std::mt19937_64& rng) {
   active.provenance = ModelProvenance{};
   active.provenance->rms_mm = fit.after.rms_mm;
   active.provenance->samples = fit.residuals.size();
+  active.covariance = fit.covariance;  // as a written model carries it
   return active;
 }
 
@@ -78,12 +80,6 @@ bool names(const HealthVerdict& v, const std::string& name) {
   const ParameterChange& first = v.moved.front();
   return first.name == name || std::find(first.equivalent.begin(), first.equivalent.end(), name) !=
                                    first.equivalent.end();
-}
-
-std::string fmtDelta(double value, const char* unit) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%g %s", value, unit);
-  return buf;
 }
 
 }  // namespace
@@ -198,7 +194,7 @@ TEST_CASE("the thresholds decide the verdict, and too few samples cannot pass") 
   const HealthVerdict pass = assessHealth(exact, samples, options);
   CHECK(pass.status == HealthStatus::kPass);
   CHECK(pass.rms_ratio == Approx(1).margin(0.25));
-  CHECK_THAT(pass.reason, Catch::Contains("below 1.30"));
+  CHECK_THAT(pass.reason, Catch::Contains("below 2.50"));
   options.warn_ratio = pass.rms_ratio * 0.9;
   const HealthVerdict warn = assessHealth(exact, samples, options);
   CHECK(warn.status == HealthStatus::kWarn);
@@ -294,69 +290,4 @@ TEST_CASE("bad input to the health check is a clear error") {
   options = {};
   options.prior_joint_offset_deg = -1;
   CHECK_THROWS_AS(assessHealth(nominal, samples, options), std::invalid_argument);
-}
-
-// Not run by default (hidden): the table of docs/health-check.md, 200 seeds of every joint offset
-// and every link translation moved alone. ./tests/test_solver "[.health-sweep]" (about 10 s).
-TEST_CASE("sweep: what the check sees of each joint offset and link translation",
-          "[.health-sweep]") {
-  const int seeds = 200;
-  struct Row {
-    std::string name;
-    double delta = 0;
-    int index = -1;  // into ParamVector; -1 for the unchanged robot
-    std::vector<double> ratios;
-    int pass = 0, warn = 0, fail = 0, exact = 0, equivalent = 0, named = 0;
-  };
-  std::vector<Row> rows;
-  auto add = [&](const std::string& name, double delta, int index) {
-    Row row;
-    row.name = name;
-    row.delta = delta;
-    row.index = index;
-    rows.push_back(row);
-  };
-  add("unchanged", 0, -1);
-  for (double offset : {0.05, 0.1, 0.2})
-    for (int j = 0; j < kJointCount; ++j)
-      add("J" + std::to_string(j + 1) + ".offset", offset, jointParamIndex(j));
-  for (double translation : {0.2, 0.3})
-    for (int l = 0; l < kLinkCount; ++l)
-      for (int axis = 0; axis < 3; ++axis)
-        add(paramName(linkParamIndex(l) + axis), translation, linkParamIndex(l) + axis);
-  for (int seed = 1; seed <= seeds; ++seed) {
-    std::mt19937_64 rng(10000 + seed);
-    const Model truth = perturbModel(puma560NominalModel(), PerturbationSigmas{}, rng);
-    const Model active = calibrate(truth, rng);
-    for (Row& row : rows) {
-      ParamVector p = toParams(truth);
-      if (row.index >= 0)
-        p[row.index] +=
-            paramKind(row.index) == ParamKind::kAngle ? row.delta / kDegPerRad : row.delta;
-      const HealthVerdict v =
-          assessHealth(active, measure(withParams(truth, p), checkShells(), rng));
-      row.ratios.push_back(v.rms_ratio);
-      row.pass += v.status == HealthStatus::kPass;
-      row.warn += v.status == HealthStatus::kWarn;
-      row.fail += v.status == HealthStatus::kFail;
-      row.named += !v.moved.empty();
-      row.exact += !v.moved.empty() && v.moved[0].name == row.name;
-      row.equivalent += row.index >= 0 && names(v, row.name);
-    }
-  }
-  std::printf(
-      "| moved | by | RMS ratio min / median / max | pass | warn | fail | named first: exactly | "
-      "or an equivalent |\n");
-  std::printf("| --- | --- | --- | --- | --- | --- | --- | --- |\n");
-  for (Row& row : rows) {
-    std::sort(row.ratios.begin(), row.ratios.end());
-    const std::string by =
-        row.index < 0 ? ""
-                      : (paramKind(row.index) == ParamKind::kAngle ? fmtDelta(row.delta, "deg")
-                                                                   : fmtDelta(row.delta, "mm"));
-    std::printf("| %s | %s | %.2f / %.2f / %.2f | %d | %d | %d | %d | %d |\n", row.name.c_str(),
-                by.c_str(), row.ratios.front(), row.ratios[row.ratios.size() / 2],
-                row.ratios.back(), row.pass, row.warn, row.fail,
-                row.index < 0 ? row.named : row.exact, row.equivalent);
-  }
 }

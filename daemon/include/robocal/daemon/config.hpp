@@ -3,6 +3,7 @@
 #pragma once
 
 #include <robocal/drivers/config.hpp>
+#include <robocal/solver/health.hpp>
 
 #include <stdexcept>
 #include <string>
@@ -55,10 +56,11 @@ struct DaemonConfig {
   std::string log_file;                 // optional, besides stderr (journald)
   std::string log_level = "info";       // trace, debug, info, warn, error
   double watchdog_interval_s = 0;       // 0: from $WATCHDOG_USEC when systemd sets it
-  // The health check's verdict (docs/health-check.md): the check's bar RMS under the active model
-  // over the level its calibration reached; from warn_ratio warn, from fail_ratio fail.
-  double check_warn_ratio = 1.3;
-  double check_fail_ratio = 1.5;
+  // The health check's verdict (docs/health-check.md): a named change fails; with none, the
+  // check's bar RMS under the active model over the level its calibration reached, from
+  // warn_ratio warn, from fail_ratio fail (HealthOptions).
+  double check_warn_ratio = HealthOptions{}.warn_ratio;
+  double check_fail_ratio = HealthOptions{}.fail_ratio;
   drivers::DriversConfig drivers;
 };
 

@@ -1,8 +1,9 @@
-// The health check's plan (docs/health-check.md): a short verification run derived from the
+// The health check's plan (docs/health-check.md): a five-minute verification run derived from the
 // calibration cell, to tell whether the calibrated model still fits the robot (after a crash, a
-// motor swap, wear). Three connections that together use every ball and every chuck, one bar
-// extension the calibration did not use (so the check predicts shells the fit never saw), and a
-// coarse grid: about ten minutes in all. No I/O.
+// motor swap, wear). Two connections (two balls on two chucks), one bar extension the
+// calibration did not use (so the check predicts shells the fit never saw), and 30 points chosen
+// for detection: where the changes the check must see (0.02 deg on joints 1-3, 0.05 deg on
+// joints 4-6, 0.1 mm on a link) move the bar most, each parameter's signature made strong. No I/O.
 #pragma once
 
 #include <robocal/kinematics/model.hpp>
@@ -13,13 +14,17 @@
 
 namespace robocal {
 
-// The check's grid: latitudes 30 and 70 deg, longitudes every 30 deg from the calibration's first
-// longitude: 24 grid points a shell, 72 in all, about 7 minutes of robot time on the reference
-// cell (docs/health-check.md: with the operator's three connections, about 10 minutes).
-inline constexpr double kHealthCheckLatitudeFirstDeg = 30;
-inline constexpr double kHealthCheckLatitudeLastDeg = 70;
-inline constexpr double kHealthCheckLatitudeStepDeg = 40;
-inline constexpr double kHealthCheckLongitudeStepDeg = 30;
+// The check's size: points over its shells, and the shells (connections, one swap each).
+inline constexpr int kHealthCheckPoints = 30;
+inline constexpr int kHealthCheckShells = 2;
+// The grid the points are chosen from (every 10 deg of latitude and 20 of longitude, three tool
+// orientations each).
+inline constexpr GridSettings kHealthCheckCandidateGrid{10, 80, 10, 0, 20};
+inline constexpr int kHealthCheckOrientations = 3;
+// The changes the check is designed to detect (docs/health-check.md, "The plan").
+inline constexpr double kHealthCheckJoint13Deg = 0.02;
+inline constexpr double kHealthCheckJoint46Deg = 0.05;
+inline constexpr double kHealthCheckTranslationMm = 0.1;
 // The operator's time per shell that the check's total assumes: take the bar off the previous
 // connection, seat it on the next, confirm (the first with the check's extension put on).
 inline constexpr double kHealthCheckOperatorMinPerShell = 1.0;
@@ -34,13 +39,19 @@ double healthCheckExtension(const BarSettings& calibration);
 // matchings. Throws PlanError when the calibration's connections hold no such three.
 std::vector<Connection> healthCheckConnections(const std::vector<Connection>& calibration);
 
-// The verification cell: the calibration cell with healthCheckConnections, the one extension
-// healthCheckExtension and the check's grid; bar, tool policy, margins, motion and uncertainty
-// unchanged. Throws PlanError as healthCheckConnections does.
+// The verification cell: the calibration cell with the first kHealthCheckShells of
+// healthCheckConnections, the one extension healthCheckExtension and the candidate grid; bar,
+// tool policy, margins, motion and uncertainty unchanged. Throws PlanError as
+// healthCheckConnections does.
 CellConfig healthCheckCell(const CellConfig& calibration);
 
-// Plans the check: planCell(model, healthCheckCell(calibration)) with purpose kCheck and the
-// identification summary (summarizeIdentifiability) filled in. Throws PlanError.
+// Plans the check on healthCheckCell(calibration): kHealthCheckPoints points, shared equally by
+// its shells, chosen greedily from each shell's safe candidates to raise sum_k log(1 + S_k), S_k
+// the noncentrality sum_points (dL/dp_k d_k / sigma)^2 of a change d_k of parameter k (the
+// targets above, for every joint offset and link translation; sigma the paper's 0.084 mm), so
+// that no parameter's signature is left weak; each shell's points in a short tour, joined by the
+// ordinary planner (every safety rule of docs/plan-format.md). Purpose kCheck, with the
+// identification summary (summarizeIdentifiability). Throws PlanError.
 Plan planHealthCheck(const Model& model, const CellConfig& calibration);
 
 }  // namespace robocal
