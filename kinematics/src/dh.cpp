@@ -67,7 +67,7 @@ Eigen::Isometry3d dhToolPose(const DhTable& table, const JointsDeg& readings) {
   Eigen::Isometry3d t = table.base;
   for (int i = 0; i < kJointCount; ++i) {
     const DHRow& row = table.rows[i];
-    t = t * dhStep(row, degToRad(row.theta_offset_deg + table.gains[i] * readings[i]));
+    t = t * dhStep(row, jointAngleRad(degToRad(row.theta_offset_deg), table.gains[i], readings[i]));
   }
   return t * table.tool;
 }

@@ -14,7 +14,7 @@ Eigen::Isometry3d rotZ(double angle_rad) {
 // Joint angle (rad) of joint j for a reading in degrees.
 double theta(const ParamVector& p, int j, double reading_deg) {
   const int i = jointParamIndex(j);
-  return p[i] + p[i + 1] * reading_deg * kRadPerDeg;
+  return jointAngleRad(p[i], p[i + 1], reading_deg);
 }
 
 }  // namespace

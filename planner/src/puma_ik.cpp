@@ -90,11 +90,13 @@ PumaIk::PumaIk(const Model& model) : model_(model), kin_(model) {
 }
 
 double PumaIk::theta(int j, double reading_deg) const {
-  return (model_.joints[j].offset_deg + model_.joints[j].gain * reading_deg) * kRadPerDeg;
+  return jointAngleRad(model_.joints[j].offset_deg * kRadPerDeg, model_.joints[j].gain,
+                       reading_deg);
 }
 
 double PumaIk::reading(int j, double theta_rad) const {
-  return (theta_rad * kDegPerRad - model_.joints[j].offset_deg) / model_.joints[j].gain;
+  return jointReadingDeg(model_.joints[j].offset_deg * kRadPerDeg, model_.joints[j].gain,
+                         theta_rad);
 }
 
 bool PumaIk::wrapIntoLimits(JointsDeg& q, const JointsDeg* near) const {

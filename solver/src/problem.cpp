@@ -40,7 +40,7 @@ double BarLengthModel::evaluate(const Sample& s, double* gradient) const {
   origin[0] = t;
   const JointsDeg q = loaded_ ? loaded_->twistedReadings(s.joints_deg) : s.joints_deg;
   for (int j = 0; j < kJointCount; ++j) {
-    const double theta = offset_rad_[j] + gain_[j] * q[j] * kRadPerDeg;
+    const double theta = jointAngleRad(offset_rad_[j], gain_[j], q[j]);
     const double c = std::cos(theta), sn = std::sin(theta);
     if (kGradient) axis[j] = rot.col(2);
     const Eigen::Vector3d x = c * rot.col(0) + sn * rot.col(1);

@@ -9,6 +9,8 @@
 // converts between the two.
 #pragma once
 
+#include <robocal/kinematics/units.hpp>
+
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <array>
@@ -145,6 +147,17 @@ constexpr int jointParamIndex(int joint /*0-based*/) {
   return linkParamIndex(joint) + kLinkParamCount;
 }
 ParamKind paramKind(int index);
+
+// The joint model, in one place: a joint turns to offset + gain * reading, the angle in radians
+// for the controller's reading in degrees (offset in radians, gain unitless, as in ParamVector).
+// Forward kinematics, the fit's bar-length model, the DH export and the closed-form IK all go
+// through these two; jointReadingDeg is the inverse.
+constexpr double jointAngleRad(double offset_rad, double gain, double reading_deg) {
+  return offset_rad + gain * reading_deg * kRadPerDeg;
+}
+constexpr double jointReadingDeg(double offset_rad, double gain, double angle_rad) {
+  return (angle_rad - offset_rad) * kDegPerRad / gain;
+}
 // One sigma per parameter (internal units) from a sigma per kind in interface units: link
 // translations (mm), link angles (deg), joint offsets (deg), joint gains (unitless). The
 // simulator's perturbation and the daemon's centring prior share it.
