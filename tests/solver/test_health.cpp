@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <initializer_list>
 #include <random>
 #include <string>
 
@@ -53,10 +54,11 @@ const Shells& checkShells() {
   return s;
 }
 
-std::vector<Sample> measure(const Model& truth, const Shells& shells, std::mt19937_64& rng) {
+std::vector<Sample> measure(const Model& truth, const Shells& shells, std::mt19937_64& rng,
+                            double noise_mm = kNoiseMm) {
   std::vector<Sample> all;
   for (size_t i = 0; i < shells.requests.size(); ++i) {
-    auto s = measureShell(truth, shells.requests[i], shells.poses[i], {kNoiseMm, 0}, rng);
+    auto s = measureShell(truth, shells.requests[i], shells.poses[i], {noise_mm, 0}, rng);
     all.insert(all.end(), s.begin(), s.end());
   }
   return all;
@@ -206,6 +208,56 @@ TEST_CASE("the thresholds decide the verdict, and too few samples cannot pass") 
   const HealthVerdict too_few = assessHealth(exact, few);
   CHECK(too_few.status == HealthStatus::kWarn);
   CHECK_THAT(too_few.reason, Catch::Contains("too few"));
+}
+
+TEST_CASE("a noisier check is judged at its own level: unchanged passes and says so, moved fails") {
+  std::mt19937_64 rng(11);
+  const Model truth = perturbModel(puma560NominalModel(), PerturbationSigmas{}, rng);
+  const Model active = calibrate(truth, rng);
+  int passed = 0, named = 0;
+  for (int k = 0; k < 5; ++k) {  // five check runs at twice the calibration's noise
+    const HealthVerdict v = assessHealth(active, measure(truth, checkShells(), rng, 2 * kNoiseMm));
+    INFO(v.reason);
+    CHECK(v.rms_ratio > 1.5);  // the ten-minute check's fail_ratio: it said FAIL here
+    CHECK(v.noise_mm > 1.5 * v.reference_rms_mm);
+    CHECK(v.check_level_mm == Approx(v.noise_mm).epsilon(0.01));
+    passed += v.status == HealthStatus::kPass;
+    named += !v.moved.empty();
+    if (v.status == HealthStatus::kPass) CHECK_THAT(v.reason, Catch::Contains("noisier"));
+  }
+  CHECK(passed >= 4);
+  CHECK(named <= 1);
+  // The same noise with joint 2 moved by 0.1 deg: still named.
+  Model moved = truth;
+  moved.joints[1].offset_deg += 0.1;
+  const HealthVerdict v = assessHealth(active, measure(moved, checkShells(), rng, 2 * kNoiseMm));
+  CHECK(v.status == HealthStatus::kFail);
+  REQUIRE_FALSE(v.moved.empty());
+  CHECK(v.moved[0].name == "J2.offset");
+  CHECK_THAT(v.reason, Catch::StartsWith("the robot moved: J2.offset +0."));
+}
+
+TEST_CASE(
+    "the active model's covariance is taken out: a change within its own error is not named") {
+  // The test allows for the calibration's error at the check's poses (its covariance C): a
+  // model that claims to be 100 times less certain (C x 1e4) explains 0.05 deg of joint 2 by
+  // its own error and names nothing; with its real covariance, or none, the change is named.
+  std::mt19937_64 rng(12);
+  const Model truth = perturbModel(puma560NominalModel(), PerturbationSigmas{}, rng);
+  const Model active = calibrate(truth, rng);
+  REQUIRE(active.covariance);
+  Model moved = truth;
+  moved.joints[1].offset_deg += 0.05;
+  const auto samples = measure(moved, checkShells(), rng);
+  Model bare = active, vague = active;
+  bare.covariance.reset();
+  *vague.covariance *= 1e4;
+  for (const Model* m : std::initializer_list<const Model*>{&active, &bare}) {
+    const HealthVerdict v = assessHealth(*m, samples);
+    REQUIRE_FALSE(v.moved.empty());
+    CHECK(v.moved[0].name == "J2.offset");
+  }
+  CHECK(assessHealth(vague, samples).moved.empty());
 }
 
 TEST_CASE("a large change is named with its size: joint 2 off by a whole degree") {
