@@ -81,6 +81,11 @@ std::string healthVerdictText(const HealthVerdict& v) {
       fmt("changes judged at a noise of %.4f mm (the check's own level %.4f mm, after what "
           "it names)\n",
           v.noise_mm, v.check_level_mm);
+  if (!v.model_covariance)
+    out +=
+        "note: the model carries no covariance, so its own error at the check's poses is tested "
+        "as if it were a change (about 4% false alarms); a model robocal solve or robocald wrote "
+        "carries one\n";
   out += "residual per shell:\n";
   out += "  shell  connection        n   RMS (mm)   max (mm)  mean (mm)  RMS/median\n";
   for (const ShellResiduals& s : v.shells.shells) {
@@ -140,6 +145,7 @@ ordered_json healthVerdictJson(const HealthVerdict& v) {
   out["fail_ratio"] = v.fail_ratio;
   out["noise_mm"] = v.noise_mm;
   out["check_level_mm"] = v.check_level_mm;
+  out["model_covariance"] = v.model_covariance;
   ordered_json moved = ordered_json::array();
   for (const ParameterChange& c : v.moved) {
     ordered_json m;

@@ -42,6 +42,10 @@ void checkOptions(const HealthOptions& o) {
     throw std::invalid_argument("health options: max_iterations must be at least 1");
 }
 
+bool hasParamCovariance(const Model& m) {
+  return m.covariance && m.covariance->rows() == kParamCount && m.covariance->cols() == kParamCount;
+}
+
 // The small refit: forward selection of the parameters that explain the residuals, each refitted
 // with the prior from the active model, at the noise level `noise` (docs/health-check.md, "What
 // moved").
@@ -79,8 +83,7 @@ Named selectMoved(const Model& active, const std::vector<Sample>& samples,
   // columns whitened by L^-1, L L^T = I + J C J^T / noise^2 (identity without a covariance).
   const Eigen::Index n = out.jac.rows();
   Eigen::LLT<Eigen::MatrixXd> whitening(Eigen::MatrixXd::Identity(n, n));
-  if (active.covariance && active.covariance->rows() == kParamCount &&
-      active.covariance->cols() == kParamCount)
+  if (hasParamCovariance(active))
     whitening.compute(Eigen::MatrixXd::Identity(n, n) +
                       out.jac * *active.covariance * out.jac.transpose() / (noise * noise));
   std::vector<int>& selected = out.selected;
@@ -272,6 +275,7 @@ HealthVerdict assessHealth(const Model& active, const std::vector<Sample>& check
   v.fail_ratio = options.fail_ratio;
 
   v.refit_rms_mm = v.residuals.rms_mm;
+  v.model_covariance = hasParamCovariance(active);
   nameWhatMoved(active, check_samples, options, v);
   v.refit_ratio = v.refit_rms_mm / v.reference_rms_mm;
 

@@ -256,7 +256,11 @@ TEST_CASE(
     const HealthVerdict v = assessHealth(*m, samples);
     REQUIRE_FALSE(v.moved.empty());
     CHECK(v.moved[0].name == "J2.offset");
+    CHECK(v.model_covariance == (m == &active));
   }
+  // Without one the verdict says what the test could not allow for.
+  CHECK_THAT(healthVerdictText(assessHealth(bare, samples)),
+             Catch::Contains("the model carries no covariance"));
   CHECK(assessHealth(vague, samples).moved.empty());
 }
 
@@ -313,6 +317,9 @@ TEST_CASE("the verdict as text and JSON, and its exit status") {
   CHECK(j["moved"][0].contains("sigma_mm"));
   CHECK(j["shells"].size() == 3);
   CHECK(j["worst_shells"].size() == 3);
+  CHECK(j["model_covariance"] == true);
+  CHECK(j["noise_mm"].get<double>() >= v.reference_rms_mm);
+  CHECK_THAT(text, !Catch::Contains("carries no covariance"));
 
   CHECK(healthExitStatus(HealthStatus::kPass) == 0);
   CHECK(healthExitStatus(HealthStatus::kWarn) == 4);

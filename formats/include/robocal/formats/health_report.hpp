@@ -24,7 +24,7 @@ std::string healthVerdictText(const HealthVerdict& verdict);
 // The verdict as one object: status ("pass", "warn", "fail"), reason, samples, connections,
 // extensions_mm, rms_mm, mean_mm, max_abs_mm, reference_rms_mm, reference ("baseline",
 // "calibration", "fallback"), rms_ratio, ratio_scatter, warn_ratio, fail_ratio, noise_mm,
-// check_level_mm, moved (name,
+// check_level_mm, model_covariance, moved (name,
 // unit, change_<unit>, sigma_<unit>, prior_sigma_<unit>, significance, prior_ratio, text,
 // equivalent), refit_rms_mm, refit_ratio, worst_shells, shells (docs/health-check.md).
 nlohmann::ordered_json healthVerdictJson(const HealthVerdict& verdict);

@@ -118,6 +118,10 @@ struct HealthVerdict {
   // freedom, sqrt(sum r^2 / (n - named))).
   double noise_mm = 0;
   double check_level_mm = 0;
+  // Whether the active model carried its covariance, so that the test allowed for the model's
+  // own error at the check's poses; without it that error is tested as if it were a change
+  // (about 4% false alarms at the default significance).
+  bool model_covariance = false;
   // What moved: the named parameters, most significant first (at most HealthOptions::max_named);
   // empty when nothing did. Anything here makes the verdict FAIL.
   std::vector<ParameterChange> moved;
