@@ -186,7 +186,7 @@ void describeMoved(const Model& active, const HealthOptions& options, const Name
 void nameWhatMoved(const Model& active, const std::vector<Sample>& samples,
                    const HealthOptions& options, HealthVerdict& v) {
   const auto ownLevel = [&](const Named& n) {
-    const double dof = static_cast<double>(samples.size() - n.selected.size());
+    const double dof = static_cast<double>(samples.size()) - static_cast<double>(n.selected.size());
     return dof > 0 ? n.rms_mm * std::sqrt(static_cast<double>(samples.size()) / dof) : n.rms_mm;
   };
   double noise = v.reference_rms_mm;
