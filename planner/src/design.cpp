@@ -209,6 +209,35 @@ std::vector<size_t> shortTour(const ShellPlanner& planner, const JointsDeg& star
   return tour;
 }
 
+Plan joinChosenPoints(const Model& model, const ShellPlanner& planner,
+                      const std::vector<ShellChoice>& shells) {
+  Plan plan;
+  plan.model_name = model.name;
+  plan.cell = planner.cell();
+  std::vector<size_t> used;
+  for (size_t s = 0; s < shells.size(); ++s)
+    if (std::find(shells[s].chosen.begin(), shells[s].chosen.end(), 1) != shells[s].chosen.end())
+      used.push_back(s);
+  plan.shells.resize(used.size());
+  parallelFor(used.size(), [&](size_t n) {
+    const ShellChoice& shell = shells[used[n]];
+    const ShellCandidates& c = *shell.candidates;
+    std::vector<ShellPoint> points;
+    for (size_t i = 0; i < shell.chosen.size(); ++i)
+      if (shell.chosen[i]) points.push_back(c.points[i]);
+    const JointsDeg start = c.connect ? c.connect->joints_deg : points[0].joints_deg;
+    std::vector<ShellPoint> ordered;
+    for (size_t k : shortTour(planner, start, points)) ordered.push_back(points[k]);
+    plan.shells[n] =
+        planner.joinPoints(shell.connection, shell.extension_mm, static_cast<int>(n) + 1, c.config,
+                           c.connect, std::move(ordered));
+  });
+  std::erase_if(plan.shells, [](const ShellPlan& s) { return s.summary.points == 0; });
+  for (size_t n = 0; n < plan.shells.size(); ++n) plan.shells[n].shell = static_cast<int>(n) + 1;
+  summarizePlan(plan);
+  return plan;
+}
+
 namespace {
 
 // The greedy pick and the exchange passes for one estimate of a point's cost in cell time.
@@ -309,36 +338,6 @@ std::vector<std::vector<char>> selectPoints(const ShellPlanner& planner,
   return chosen;
 }
 
-// The plan of the chosen points: each shell's points in a short tour from its connect pose,
-// joined with vias (shells in parallel).
-Plan joinChosen(const Model& model, const CellConfig& cell, const ShellPlanner& planner,
-                const std::vector<ShellPool>& pools, const std::vector<std::vector<char>>& chosen) {
-  Plan plan;
-  plan.model_name = model.name;
-  plan.cell = cell;
-  std::vector<size_t> used;
-  for (size_t s = 0; s < pools.size(); ++s)
-    if (std::find(chosen[s].begin(), chosen[s].end(), 1) != chosen[s].end()) used.push_back(s);
-  plan.shells.resize(used.size());
-  parallelFor(used.size(), [&](size_t n) {
-    const ShellPool& pool = pools[used[n]];
-    std::vector<ShellPoint> points;
-    for (size_t i = 0; i < chosen[used[n]].size(); ++i)
-      if (chosen[used[n]][i]) points.push_back(pool.candidates.points[i]);
-    const JointsDeg start =
-        pool.candidates.connect ? pool.candidates.connect->joints_deg : points[0].joints_deg;
-    std::vector<ShellPoint> ordered;
-    for (size_t k : shortTour(planner, start, points)) ordered.push_back(points[k]);
-    plan.shells[n] =
-        planner.joinPoints(pool.connection, pool.extension_mm, static_cast<int>(n) + 1,
-                           pool.candidates.config, pool.candidates.connect, std::move(ordered));
-  });
-  std::erase_if(plan.shells, [](const ShellPlan& s) { return s.summary.points == 0; });
-  for (size_t n = 0; n < plan.shells.size(); ++n) plan.shells[n].shell = static_cast<int>(n) + 1;
-  summarizePlan(plan);
-  return plan;
-}
-
 }  // namespace
 
 Plan planOptimal(const Model& model, const CellConfig& cell,
@@ -390,7 +389,11 @@ Plan planOptimal(const Model& model, const CellConfig& cell,
     rep.rounds = round;
     const auto chosen = selectPoints(planner, pools, criterion, prior, options, point_s,
                                      motion.swap_s, options.budget_s);
-    Plan plan = joinChosen(model, cell, planner, pools, chosen);
+    std::vector<ShellChoice> choices;
+    for (size_t p = 0; p < pools.size(); ++p)
+      choices.push_back(
+          {pools[p].connection, pools[p].extension_mm, &pools[p].candidates, chosen[p]});
+    Plan plan = joinChosenPoints(model, planner, choices);
     if (plan.summary.points == 0) break;
     const double cell_s = plan.summary.cell_time_s;
     // The real cost of a point on this plan's tours (moves, vias, dwell), for the next pick;

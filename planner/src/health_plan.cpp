@@ -153,32 +153,16 @@ Plan planHealthCheck(const Model& model, const CellConfig& calibration) {
       }
     return chosen;
   };
-  // Each shell's chosen points in a short tour, joined by the planner.
-  auto join = [&](const std::vector<std::vector<char>>& chosen) {
-    Plan plan;
-    plan.model_name = model.name;
-    plan.cell = cell;
-    for (size_t s = 0; s < pools.size(); ++s) {
-      const ShellCandidates& c = pools[s].candidates;
-      std::vector<ShellPoint> points;
-      for (size_t i = 0; i < c.points.size(); ++i)
-        if (chosen[s][i]) points.push_back(c.points[i]);
-      const JointsDeg start = c.connect ? c.connect->joints_deg : points.front().joints_deg;
-      std::vector<ShellPoint> ordered;
-      for (size_t k : shortTour(planner, start, points)) ordered.push_back(points[k]);
-      plan.shells.push_back(planner.joinPoints(cell.connections[s], extension_mm,
-                                               static_cast<int>(s) + 1, c.config, c.connect,
-                                               std::move(ordered)));
-    }
-    summarizePlan(plan);
-    return plan;
-  };
   // The pick's travel is a guess (it does not see the vias a move needs, which the join adds):
   // a few weights of it, and the plan with the most points in the least robot time kept. On
   // perturbed models a single weight landed on 2.5 or 3.1 minutes (docs/health-check.md).
   Plan plan;
   for (double travel_weight : {1.0, 1.5, 2.0, 3.0}) {
-    Plan candidate = join(pick(travel_weight));
+    const std::vector<std::vector<char>> chosen = pick(travel_weight);
+    std::vector<ShellChoice> choices;
+    for (size_t s = 0; s < pools.size(); ++s)
+      choices.push_back({cell.connections[s], extension_mm, &pools[s].candidates, chosen[s]});
+    Plan candidate = joinChosenPoints(model, planner, choices);
     if (plan.shells.empty() || candidate.summary.points > plan.summary.points ||
         (candidate.summary.points == plan.summary.points &&
          candidate.summary.duration_s < plan.summary.duration_s))

@@ -42,6 +42,12 @@ void checkOptions(const HealthOptions& o) {
     throw std::invalid_argument("health options: max_iterations must be at least 1");
 }
 
+// The refit's prior: how far each parameter is expected to move (ParamVector units).
+ParamVector priorSigmas(const HealthOptions& o) {
+  return paramSigmas(o.prior_translation_mm, o.prior_link_angle_deg, o.prior_joint_offset_deg,
+                     o.prior_gain);
+}
+
 bool hasParamCovariance(const Model& m) {
   return m.covariance && m.covariance->rows() == kParamCount && m.covariance->cols() == kParamCount;
 }
@@ -66,8 +72,7 @@ Named selectMoved(const Model& active, const std::vector<Sample>& samples,
   // solveCalibration weighs a sample's residual (mm) as one unit against a prior row
   // (start - p) / prior_sigma; dividing the prior sigmas by the noise level (mm) makes its cost
   // noise^2 times sum (r / noise)^2 + sum ((p - start) / prior)^2, the proper posterior.
-  const ParamVector prior = paramSigmas(options.prior_translation_mm, options.prior_link_angle_deg,
-                                        options.prior_joint_offset_deg, options.prior_gain);
+  const ParamVector prior = priorSigmas(options);
   SolveOptions solve;
   solve.prior_sigma = prior / noise;
   solve.max_iterations = options.max_iterations;
@@ -139,8 +144,7 @@ Named selectMoved(const Model& active, const std::vector<Sample>& samples,
 void describeMoved(const Model& active, const HealthOptions& options, const Named& named,
                    double noise, HealthVerdict& v) {
   if (named.selected.empty()) return;
-  const ParamVector prior = paramSigmas(options.prior_translation_mm, options.prior_link_angle_deg,
-                                        options.prior_joint_offset_deg, options.prior_gain);
+  const ParamVector prior = priorSigmas(options);
   const ParamVector start = toParams(active);
   const SolveResult& fit = named.fit;
   const Eigen::MatrixXd& jac = named.jac;
@@ -274,7 +278,6 @@ HealthVerdict assessHealth(const Model& active, const std::vector<Sample>& check
   v.warn_ratio = options.warn_ratio;
   v.fail_ratio = options.fail_ratio;
 
-  v.refit_rms_mm = v.residuals.rms_mm;
   v.model_covariance = hasParamCovariance(active);
   nameWhatMoved(active, check_samples, options, v);
   v.refit_ratio = v.refit_rms_mm / v.reference_rms_mm;

@@ -92,6 +92,20 @@ Plan planOptimal(const Model& model, const CellConfig& cell,
                  const std::vector<JointsDeg>& work_joints, const DesignOptions& options,
                  DesignReport* report = nullptr);
 
+// One shell's safe candidates (ShellPlanner::candidatePoints) and which of them a design chose.
+struct ShellChoice {
+  Connection connection;
+  double extension_mm = 0;
+  const ShellCandidates* candidates = nullptr;
+  std::vector<char> chosen;  // one flag per candidate point
+};
+
+// The plan of the chosen points of `planner`'s cell: each shell's in a short tour from its
+// connect pose (shortTour), joined with vias by the planner (shells in parallel); shells with no
+// point left out, the rest numbered from 1, the summary filled in (not rank or deflection).
+Plan joinChosenPoints(const Model& model, const ShellPlanner& planner,
+                      const std::vector<ShellChoice>& shells);
+
 // Visiting order of points that starts at `start` and keeps the total move time short (nearest
 // neighbour, then 2-opt): indices into `points`.
 std::vector<size_t> shortTour(const ShellPlanner& planner, const JointsDeg& start,
