@@ -12,7 +12,8 @@
 # first point every 5 minutes of robot time (motion.reference_every_min
 # ROBOCAL_REFERENCE_EVERY_MIN; 0 for none) so that it measures the drift over the run.
 # ROBOCAL_PLAN_BUDGET_MIN=M runs an optimal plan of M minutes of cell time instead of the
-# cell's grid (docs/cell-time.md).
+# cell's grid (docs/cell-time.md). ROBOCAL_ROBOT=rx160 calibrates a Staubli RX160 under V+
+# instead of the PUMA 560 under VAL II (docs/robots.md).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 # shellcheck source=sim-cell.sh
@@ -22,14 +23,26 @@ source "$root/scripts/sim-cell.sh"
 build=${ROBOCAL_BUILD_DIR:-$root/build}
 bin=$build/cli/robocal
 out=${ROBOCAL_OUT:-$root/out}
-model=$root/config/puma560.json
+# The arm (docs/robots.md): its nominal model config/<robot>.json and its controller's dialect.
+robot=${ROBOCAL_ROBOT:-puma560}
+case $robot in
+  puma560) export ROBOCAL_SIM_DIALECT=val2 ;;  # Unimation VAL II
+  rx160) export ROBOCAL_SIM_DIALECT=vplus ;;   # Staubli RX160 under V+ (CS7 controller)
+  *)
+    echo "ROBOCAL_ROBOT: no robot '$robot' (puma560, rx160)" >&2
+    exit 2
+    ;;
+esac
+model=$root/config/$robot.json
+robot_cell=$root/config/cell.json
+[[ -f $root/config/cell-$robot.json ]] && robot_cell=$root/config/cell-$robot.json
 realism=${ROBOCAL_REALISM:-typical}
 rm -rf "$out"
 mkdir -p "$out"
 cell=$out/cell.json
 jq ".motion.approach_deg = ${ROBOCAL_APPROACH_DEG:-0.02} | .motion.revisit_every = ${ROBOCAL_REVISIT_EVERY:-20}
     | .motion.reference_every_min = ${ROBOCAL_REFERENCE_EVERY_MIN:-5}" \
-  "${ROBOCAL_CELL:-$root/config/cell.json}" >"$cell"
+  "${ROBOCAL_CELL:-$robot_cell}" >"$cell"
 pids=()
 cleanup() { for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done; }
 trap cleanup EXIT
@@ -47,7 +60,7 @@ budget=()
 "$bin" plan --model "$model" --cell "$cell" --out "$out/plan.json" "${budget[@]}" |
   grep -E "^(plan|identification|forecast|work volume|optimal|planned)"
 echo
-echo "== robocal-cellsim (VAL II and ball-bar on pseudo-terminals) and robocald"
+echo "== robocal-cellsim ($robot, $ROBOCAL_SIM_DIALECT, and the ball-bar on pseudo-terminals) and robocald"
 start_sim_cell "$build" "$out" "$model" "$cell"
 echo "robocald on 127.0.0.1:$port, its console on http://127.0.0.1:$web_port/; cellsim control $out/cellsim.sock"
 echo

@@ -5,10 +5,15 @@
 # robocald on a free port (and its console on another) with OUT/plan.json as its plan (settle and bar window 0.03 s). Appends
 # both pids to the caller's `pids`, sets `daemon_pid`, `port` and `web_port`, exports ROBOCAL_TOKEN_FILE.
 # Returns 1 (with robocald's log on stderr) when robocald does not listen.
+# The controller speaks ROBOCAL_SIM_DIALECT (val2, the default; vplus; kawasaki-as: docs/drivers.md),
+# cellsim and robocald alike.
 start_sim_cell() {
   local build=$1 out=$2 model=$3 cell=$4
+  local dialect=${ROBOCAL_SIM_DIALECT:-val2}
   shift 4
-  "$build/sim/cellsim/robocal-cellsim" --model "$out/truth.json" --val-link "$out/val" \
+  echo "{\"val\": {\"dialect\": \"$dialect\"}}" >"$out/cellsim-drivers.json"
+  "$build/sim/cellsim/robocal-cellsim" --config "$out/cellsim-drivers.json" \
+    --model "$out/truth.json" --val-link "$out/val" \
     --bar-link "$out/bar" --control "$out/cellsim.sock" --time-scale 100 --bar-mode streamed \
     --stream-hz 100 --bar-mm 150 --range-mm 2.0 --noise-mm 0.06 --quantum-deg 0.005 "$@" \
     >"$out/cellsim.log" 2>&1 &
@@ -20,7 +25,7 @@ start_sim_cell() {
   "model": "$model", "cell": "$cell", "plan": "$out/plan.json",
   "settle_s": 0.03, "bar_window_s": 0.03, "bar_soft_limit_mm": 1.0, "bar_hard_limit_mm": 1.6,
   "drivers": {
-    "val": {"serial": {"path": "$out/val"}, "poll_interval_s": 0.01},
+    "val": {"dialect": "$dialect", "serial": {"path": "$out/val"}, "poll_interval_s": 0.01},
     "bar": {"serial": {"path": "$out/bar"}, "mode": "streamed"}
   }
 }

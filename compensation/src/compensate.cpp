@@ -57,8 +57,8 @@ PoseDifference poseDifference(const Eigen::Isometry3d& a, const Eigen::Isometry3
 }
 
 Compensator::Compensator(const Model& nominal, const Model& calibrated, CompensationOptions options)
-    : nominal_(nominal),
-      calibrated_(calibrated),
+    : nominal_(makeArm(nominal)),
+      calibrated_(makeArm(calibrated)),
       options_(options),
       tool_inverse_(options.tool.inverse()),
       approach_deg_(options.approach_deg.value_or(
@@ -75,17 +75,17 @@ Compensator::Compensator(const Model& nominal, const Model& calibrated, Compensa
 }
 
 Eigen::Isometry3d Compensator::nominalToolPose(const JointsDeg& q) const {
-  return nominal_.kinematics().toolPose(q) * options_.tool;
+  return nominal_->kinematics().toolPose(q) * options_.tool;
 }
 
 Eigen::Isometry3d Compensator::calibratedToolPose(const JointsDeg& q) const {
-  return calibrated_.kinematics().toolPose(q) * options_.tool;
+  return calibrated_->kinematics().toolPose(q) * options_.tool;
 }
 
 double Compensator::predictedPositionError(const JointsDeg& q) const {
   if (!calibrated().covariance) return std::numeric_limits<double>::quiet_NaN();
   PositionJacobian full;
-  calibrated_.kinematics().ballPositionJacobian(q, options_.tool.translation(), full);
+  calibrated_->kinematics().ballPositionJacobian(q, options_.tool.translation(), full);
   Eigen::MatrixXd j(3, estimated_.size());
   for (size_t k = 0; k < estimated_.size(); ++k) j.col(k) = full.col(estimated_[k]);
   // The error the fit found the model does not contain (ModelProvenance::unmodelled_mm), seen by
@@ -99,8 +99,8 @@ double Compensator::predictedOrientationError(const JointsDeg& q) const {
   if (!calibrated().covariance) return std::numeric_limits<double>::quiet_NaN();
   // The orientation's Jacobian by central differences: 2 poses per estimated parameter, cheap
   // next to the IK (the tool point does not change the orientation).
-  const ParamVector p0 = calibrated_.kinematics().params();
-  const Eigen::Matrix3d r0 = calibrated_.kinematics().toolPose(q).linear();
+  const ParamVector p0 = calibrated_->kinematics().params();
+  const Eigen::Matrix3d r0 = calibrated_->kinematics().toolPose(q).linear();
   constexpr double kStep = 1e-6;  // mm, rad or gain: far above rounding, far below curvature
   Eigen::MatrixXd j(3, estimated_.size());
   for (size_t k = 0; k < estimated_.size(); ++k) {
@@ -108,16 +108,16 @@ double Compensator::predictedOrientationError(const JointsDeg& q) const {
     plus[estimated_[k]] += kStep;
     minus[estimated_[k]] -= kStep;
     const Eigen::Matrix3d rp =
-        Kinematics(withParams(calibrated_.model(), plus)).toolPose(q).linear();
+        Kinematics(withParams(calibrated_->model(), plus)).toolPose(q).linear();
     const Eigen::Matrix3d rm =
-        Kinematics(withParams(calibrated_.model(), minus)).toolPose(q).linear();
+        Kinematics(withParams(calibrated_->model(), minus)).toolPose(q).linear();
     const Eigen::AngleAxisd dp(rp * r0.transpose()), dm(rm * r0.transpose());
     j.col(k) = (dp.axis() * dp.angle() - dm.axis() * dm.angle()) / (2 * kStep);
   }
   return std::sqrt(std::max(0.0, (j * covariance_ * j.transpose()).trace())) * kDegPerRad;
 }
 
-CompensationStatus Compensator::classify(const PumaIk& ik, const IkSolution& s,
+CompensationStatus Compensator::classify(const Arm& ik, const IkSolution& s,
                                          std::string& reason) const {
   switch (s.status) {
     case IkStatus::kUnreachable:
@@ -156,13 +156,13 @@ CompensatedTarget Compensator::forPose(const Eigen::Isometry3d& tool_pose,
   best.reason = "out of the arm's reach in every configuration";
   for (int i = 0; i < kArmConfigCount; ++i) {
     const ArmConfig c = config ? *config : armConfigFromIndex(i);
-    const IkSolution s = nominal_.solve(flange, c);
+    const IkSolution s = nominal_->solve(flange, c);
     CompensatedTarget t;
     t.target = tool_pose;
     t.config = c;
     t.nominal_joints_deg = s.joints_deg;
     t.joints_deg = s.joints_deg;
-    t.status = classify(nominal_, s, t.reason);
+    t.status = classify(*nominal_, s, t.reason);
     // Keep the most useful answer: ok, else a solution with a reason, else unreachable.
     if (t.ok()) return solveCalibrated(t);
     if (t.status != CompensationStatus::kUnreachable &&
@@ -189,7 +189,7 @@ CompensatedTarget Compensator::forPose(const Eigen::Isometry3d& tool_pose,
 CompensatedTarget Compensator::forNominalJoints(const JointsDeg& q) const {
   CompensatedTarget t;
   t.target = nominalToolPose(q);
-  t.config = nominal_.configOf(q);
+  t.config = nominal_->configOf(q);
   t.nominal_joints_deg = q;
   t.joints_deg = q;
   return solveCalibrated(t);
@@ -197,9 +197,9 @@ CompensatedTarget Compensator::forNominalJoints(const JointsDeg& q) const {
 
 CompensatedTarget Compensator::solveCalibrated(CompensatedTarget t) const {
   const Eigen::Isometry3d flange = t.target * tool_inverse_;
-  const IkSolution s = calibrated_.refine(flange, t.config, t.nominal_joints_deg);
+  const IkSolution s = calibrated_->refine(flange, t.config, t.nominal_joints_deg);
   t.joints_deg = s.joints_deg;
-  t.status = classify(calibrated_, s, t.reason);
+  t.status = classify(*calibrated_, s, t.reason);
   const PoseDifference d = poseDifference(calibratedToolPose(t.joints_deg), t.target);
   t.position_residual_mm = d.position_mm;
   t.angle_residual_deg = d.angle_deg;

@@ -1,5 +1,5 @@
 #include <robocal/planner/cell.hpp>
-#include <robocal/planner/puma_ik.hpp>
+#include <robocal/robot/arm.hpp>
 
 #include <cmath>
 #include <stdexcept>

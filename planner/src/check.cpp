@@ -37,7 +37,7 @@ std::string describeViolation(const PlanViolation& v) {
 
 std::vector<PlanViolation> checkPlan(const Model& model, const CellConfig& cell, const Plan& plan) {
   const ShellPlanner planner(model, cell);
-  const PumaIk& ik = planner.ik();
+  const Arm& ik = planner.arm();
   const double tol = cell.motion.via_tolerance_mm;
   std::vector<PlanViolation> out;
   if (plan.shells.empty()) out.push_back({0, kShellStep, "empty", "the plan has no shells"});

@@ -93,9 +93,9 @@ struct ShellPlanner::Node {
 };
 
 ShellPlanner::ShellPlanner(const Model& model, const CellConfig& cell)
-    : ik_([&] {
+    : arm_([&] {
         try {
-          return PumaIk(model);
+          return makeArm(model);
         } catch (const std::invalid_argument& e) {
           throw PlanError(e.what());
         }
@@ -160,7 +160,7 @@ Eigen::Isometry3d ShellPlanner::policyPose(const Connection& c, double radius, d
 }
 
 PoseReport ShellPlanner::inspect(const Connection& c, double radius, const JointsDeg& q) const {
-  return inspectPose(c, radius, q, ik_.kinematics().toolPose(q));
+  return inspectPose(c, radius, q, arm_->kinematics().toolPose(q));
 }
 
 PoseReport ShellPlanner::inspectPose(const Connection& c, double radius, const JointsDeg& q,
@@ -180,7 +180,7 @@ PoseReport ShellPlanner::inspectPose(const Connection& c, double radius, const J
     return (p - (chuck - t * bar)).norm();
   };
   r.bar_clearance_mm = std::min(fromBar(pose.translation()), fromBar(wrist));
-  r.singularity = ik_.singularityMargins(q);
+  r.singularity = arm_->singularityMargins(q);
   return r;
 }
 
@@ -233,7 +233,7 @@ bool ShellPlanner::walkSegment(
     const Connection& c, const JointsDeg& a, const JointsDeg& b,
     const std::function<bool(int, const JointsDeg&, const Eigen::Isometry3d&)>& visit,
     double length) const {
-  const Kinematics& kin = ik_.kinematics();
+  const Kinematics& kin = arm_->kinematics();
   const Eigen::Vector3d ball = model().balls_mm[c.ball_index];
   const double step = cell_.motion.sample_step_mm;
   Eigen::Vector3d prev = kin.ballPosition(a, ball);
@@ -282,7 +282,7 @@ bool ShellPlanner::segmentOk(const Connection& c, double radius, const JointsDeg
   worst = 0;
   // A cheap look first: most failing segments fail at one of a few samples, which also give
   // the path's length for the dense walk.
-  const Kinematics& kin = ik_.kinematics();
+  const Kinematics& kin = arm_->kinematics();
   const Eigen::Vector3d ball = model().balls_mm[c.ball_index];
   double length = 0;
   Eigen::Vector3d prev = kin.ballPosition(a, ball);
@@ -366,7 +366,7 @@ bool ShellPlanner::planArc(const Connection& c, double radius, const ArmConfig& 
     pose.linear() = rotations[r].toRotationMatrix();
     pose.translation() = model().chucks_mm[c.chuck_index] + radius * mid.n -
                          pose.linear() * model().balls_mm[c.ball_index];
-    const IkSolution s = ik_.solve(pose, config, &a.q);
+    const IkSolution s = arm_->solve(pose, config, &a.q);
     // A via far from both ends in joint space means a joint took another turn (a limit was in
     // the way): the moves either side would swing the bar about.
     const double span = (b.q - a.q).cwiseAbs().maxCoeff();
@@ -426,14 +426,14 @@ bool ShellPlanner::planApproach(const Connection& c, double radius, const ArmCon
                                 double& worst, std::string& why) const {
   const double step_deg = cell_.motion.approach_deg;
   if (step_deg <= 0) return planArc(c, radius, config, a, b, 0, vias, worst, why);
-  const JointsDeg pre_q = approachPrePoint(ik_.kinematics(), model().balls_mm[c.ball_index],
+  const JointsDeg pre_q = approachPrePoint(arm_->kinematics(), model().balls_mm[c.ball_index],
                                            model().chucks_mm[c.chuck_index], b.q, step_deg);
   const std::string problem = poseProblem(c, radius, pre_q, cell_.motion.via_tolerance_mm);
   if (!problem.empty()) {
     why = "its approach pre-point: " + problem;
     return false;
   }
-  const Eigen::Isometry3d pose = ik_.kinematics().toolPose(pre_q);
+  const Eigen::Isometry3d pose = arm_->kinematics().toolPose(pre_q);
   Node pre = nodeFor(c, radius, b.lat_deg, b.lon_deg, pose, pre_q);
   latLonOf(pre.n, pre.lat_deg, pre.lon_deg);  // where its ball is: a step states its place
   if (!planArc(c, radius, config, a, pre, 0, vias, worst, why)) return false;
@@ -469,8 +469,8 @@ ShellPlanner::PointTry ShellPlanner::tryPoint(const Connection& c, double radius
   PointTry t;
   t.point = {lat_deg, lon_deg, off, JointsDeg::Zero()};
   const IkSolution ik =
-      ik_.solve(policyPose(c, radius, lat_deg, lon_deg, off.yaw_deg, off.pitch_deg, off.roll_deg),
-                config, nullptr);
+      arm_->solve(policyPose(c, radius, lat_deg, lon_deg, off.yaw_deg, off.pitch_deg, off.roll_deg),
+                  config, nullptr);
   if (!ik.ok()) {
     t.problem = std::string("IK: ") + ikStatusName(ik.status);
     return t;
@@ -763,7 +763,7 @@ ShellPlan ShellPlanner::joinPoints(const Connection& c, double extension_mm, int
     }
     if (reference && referenceDue()) measureReference();
     const Eigen::Isometry3d pose = poseOf(ch);
-    const IkSolution s = ik_.solve(pose, shell.config, &ch.joints_deg);
+    const IkSolution s = arm_->solve(pose, shell.config, &ch.joints_deg);
     const std::string problem = s.ok() ? poseProblem(c, radius, s.joints_deg, tol)
                                        : std::string("IK: ") + ikStatusName(s.status);
     if (n == 0) {
@@ -796,7 +796,7 @@ ShellPlan ShellPlanner::joinPoints(const Connection& c, double extension_mm, int
         const Offset& off = others[o].second;
         const Eigen::Isometry3d alt =
             policyPose(c, radius, ch.lat_deg, ch.lon_deg, off.yaw_deg, off.pitch_deg, off.roll_deg);
-        const IkSolution t = ik_.solve(alt, shell.config, &prev.q);
+        const IkSolution t = arm_->solve(alt, shell.config, &prev.q);
         if (!t.ok() || !poseProblem(c, radius, t.joints_deg, tol).empty()) continue;
         node = nodeFor(c, radius, ch.lat_deg, ch.lon_deg, alt, t.joints_deg);
         vias.clear();
@@ -833,7 +833,7 @@ ShellPlan ShellPlanner::replanRemaining(const ShellPlan& old, std::size_t next_s
   shell.summary.max_deviation_mm = 0;
   const double radius = shell.radius_mm;
   const Connection c = shell.connection;
-  const Eigen::Isometry3d here = ik_.kinematics().toolPose(current);
+  const Eigen::Isometry3d here = arm_->kinematics().toolPose(current);
   const Eigen::Vector3d ball = here * model().balls_mm[c.ball_index];
   double lat, lon;
   latLonOf((ball - model().chucks_mm[c.chuck_index]).normalized(), lat, lon);
@@ -842,11 +842,11 @@ ShellPlan ShellPlanner::replanRemaining(const ShellPlan& old, std::size_t next_s
   // The old joints' orientation under this model, with the ball put back on the shell, refined
   // from the old joints: cheap, since the models differ little.
   auto carry = [&](const PlanStep& step, IkSolution& s) {
-    Eigen::Isometry3d pose = ik_.kinematics().toolPose(step.joints_deg);
+    Eigen::Isometry3d pose = arm_->kinematics().toolPose(step.joints_deg);
     pose.translation() = model().chucks_mm[c.chuck_index] +
                          radius * unitOnSphere(step.lat_deg, step.lon_deg) -
                          pose.linear() * model().balls_mm[c.ball_index];
-    s = ik_.refine(pose, shell.config, step.joints_deg);
+    s = arm_->refine(pose, shell.config, step.joints_deg);
     return pose;
   };
   std::vector<Node> old_vias;  // the old vias since the last point, carried over
@@ -859,7 +859,7 @@ ShellPlan ShellPlanner::replanRemaining(const ShellPlan& old, std::size_t next_s
         old_vias.push_back(nodeFor(c, radius, step.lat_deg, step.lon_deg, pose, s.joints_deg));
       continue;
     }
-    if (!s.ok()) s = ik_.solve(pose, shell.config, &prev.q);
+    if (!s.ok()) s = arm_->solve(pose, shell.config, &prev.q);
     std::string why = s.ok() ? poseProblem(c, radius, s.joints_deg, cell_.motion.via_tolerance_mm)
                              : std::string("IK: ") + ikStatusName(s.status);
     if (!why.empty()) {

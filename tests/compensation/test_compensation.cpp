@@ -10,6 +10,7 @@
 #include <robocal/formats/program.hpp>
 #include <robocal/kinematics/puma560.hpp>
 #include <robocal/planner/cell_json.hpp>
+#include <robocal/robot/puma_ik.hpp>
 #include <robocal/sim/measurements.hpp>
 #include <robocal/solver/calibrate.hpp>
 

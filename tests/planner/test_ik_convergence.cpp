@@ -7,7 +7,7 @@
 #include <robocal/compensation/compensate.hpp>
 #include <robocal/kinematics/puma560.hpp>
 #include <robocal/kinematics/units.hpp>
-#include <robocal/planner/puma_ik.hpp>
+#include <robocal/robot/puma_ik.hpp>
 #include <robocal/sim/measurements.hpp>
 
 #include <chrono>

@@ -9,6 +9,7 @@
 #include <robocal/planner/check.hpp>
 #include <robocal/planner/plan.hpp>
 #include <robocal/planner/plan_json.hpp>
+#include <robocal/robot/puma_ik.hpp>
 #include <robocal/sim/measurements.hpp>
 
 #include <unistd.h>

@@ -16,9 +16,10 @@
 #pragma once
 
 #include <robocal/kinematics/model.hpp>
-#include <robocal/planner/puma_ik.hpp>
+#include <robocal/robot/arm.hpp>
 
 #include <array>
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -52,7 +53,7 @@ struct CompensationOptions {
   // The calibrated solution must reach the target this closely, else the status says why not.
   double position_tolerance_mm = 1e-4;
   double angle_tolerance_rad = 1e-6;
-  // Closer than these to a singularity (PumaIk::singularityMargins) is near_singularity.
+  // Closer than these to a singularity (Arm::singularityMargins) is near_singularity.
   double wrist_singularity_deg = 2.0;
   double elbow_singularity_deg = 2.0;
   double shoulder_singularity_mm = 20.0;
@@ -100,11 +101,11 @@ struct CompensatedTarget {
 
 class Compensator {
  public:
-  // Throws std::invalid_argument when a model is not a PUMA-like chain (PumaIk).
+  // Throws std::invalid_argument when no arm serves a model (makeArm).
   Compensator(const Model& nominal, const Model& calibrated, CompensationOptions options = {});
 
-  const Model& nominal() const { return nominal_.model(); }
-  const Model& calibrated() const { return calibrated_.model(); }
+  const Model& nominal() const { return nominal_->model(); }
+  const Model& calibrated() const { return calibrated_->model(); }
   const CompensationOptions& options() const { return options_; }
   // The pre-point step in effect (options, else the calibrated model's), deg; 0: none.
   double approachDeg() const { return approach_deg_; }
@@ -137,10 +138,10 @@ class Compensator {
   void judgeCoverage(CompensatedTarget& t) const;
   // A target with readings gets its approach pre-point, checked against the joint limits.
   void addApproach(CompensatedTarget& t) const;
-  // The status a solution gets from PumaIk's status and the singularity margins.
-  CompensationStatus classify(const PumaIk& ik, const IkSolution& s, std::string& reason) const;
+  // The status a solution gets from the arm's IK status and the singularity margins.
+  CompensationStatus classify(const Arm& ik, const IkSolution& s, std::string& reason) const;
 
-  PumaIk nominal_, calibrated_;
+  std::shared_ptr<const Arm> nominal_, calibrated_;
   CompensationOptions options_;
   Eigen::Isometry3d tool_inverse_;
   double approach_deg_ = 0;

@@ -6,9 +6,10 @@
 #include <robocal/kinematics/kinematics.hpp>
 #include <robocal/kinematics/sample.hpp>
 #include <robocal/planner/cell.hpp>
-#include <robocal/planner/puma_ik.hpp>
+#include <robocal/robot/arm.hpp>
 
 #include <functional>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -148,9 +149,9 @@ class ShellPlanner {
  public:
   ShellPlanner(const Model& model, const CellConfig& cell);
 
-  const Model& model() const { return ik_.model(); }
+  const Model& model() const { return arm_->model(); }
   const CellConfig& cell() const { return cell_; }
-  const PumaIk& ik() const { return ik_; }
+  const Arm& arm() const { return *arm_; }
 
   ShellPlan planShell(const Connection& connection, double extension_mm, int shell_number) const;
 
@@ -244,7 +245,7 @@ class ShellPlanner {
   Node nodeFor(const Connection& c, double radius, double lat_deg, double lon_deg,
                const Eigen::Isometry3d& pose, const JointsDeg& q) const;
 
-  PumaIk ik_;
+  std::shared_ptr<const Arm> arm_;
   CellConfig cell_;
   Eigen::Vector3d joint1_origin_;
   Eigen::Isometry3d tool_inv_;

@@ -1,4 +1,4 @@
-#include <robocal/planner/puma_ik.hpp>
+#include <robocal/robot/puma_ik.hpp>
 
 #include <robocal/kinematics/units.hpp>
 
@@ -20,73 +20,69 @@ constexpr double kBoundaryElbowDeg = 1.0;
 constexpr double kBoundaryShoulderMm = 5.0;
 // How far (deg) a link rotation of the model may be from the PUMA's alpha.
 constexpr double kAlphaToleranceDeg = 5.0;
+// How far the closed form may miss a pose of a model it fits (a calibration moves links by a
+// few millimetres and tenths of a degree; the refinement starts from there).
+constexpr double kFitsPositionMm = 20.0;
+constexpr double kFitsAngleDeg = 2.0;
 
 double angleDistanceDeg(double a, double b) {
   return std::abs(std::remainder(a - b, 360.0));
 }
 
-}  // namespace
-
-ArmConfig armConfigFromIndex(int index) {
-  return {(index & 4) != 0, (index & 2) != 0, (index & 1) != 0};
-}
-
-int armConfigIndex(const ArmConfig& c) {
-  return (c.left ? 4 : 0) | (c.elbow_down ? 2 : 0) | (c.wrist_flip ? 1 : 0);
-}
-
-std::string armConfigName(const ArmConfig& c) {
-  return std::string(c.left ? "left" : "right") + (c.elbow_down ? "-down" : "-up") +
-         (c.wrist_flip ? "-flip" : "-noflip");
-}
-
-std::optional<ArmConfig> parseArmConfig(const std::string& name) {
-  for (int i = 0; i < kArmConfigCount; ++i)
-    if (armConfigName(armConfigFromIndex(i)) == name) return armConfigFromIndex(i);
-  return std::nullopt;
-}
-
-const char* ikStatusName(IkStatus status) {
-  switch (status) {
-    case IkStatus::kOk:
-      return "ok";
-    case IkStatus::kUnreachable:
-      return "unreachable";
-    case IkStatus::kSingular:
-      return "singular";
-    case IkStatus::kOutsideLimits:
-      return "outside joint limits";
-    case IkStatus::kNoConvergence:
-      return "no convergence";
-  }
-  return "?";
-}
-
-PumaIk::PumaIk(const Model& model) : model_(model), kin_(model) {
+// Why the model is not a chain the closed form serves; empty when it is.
+std::string pumaChainProblem(const Model& model) {
   const std::array<double, 5> alphas = {90, 0, -90, 90, -90};
   for (int k = 1; k <= 5; ++k) {
     const LinkParams& l = model.links[k];
     if (angleDistanceDeg(l.rx_deg, alphas[k - 1]) > kAlphaToleranceDeg ||
         angleDistanceDeg(l.ry_deg, 0) > kAlphaToleranceDeg ||
         angleDistanceDeg(l.rz_deg, 0) > kAlphaToleranceDeg)
-      throw std::invalid_argument("model '" + model.name + "': link L" + std::to_string(k) +
-                                  " is not a PUMA 560 link (rotations far from the DH alphas)");
+      return "model '" + model.name + "': link L" + std::to_string(k) +
+             " is not a PUMA 560 link (rotations far from the DH alphas)";
   }
-  for (int j = 0; j < kJointCount; ++j)
-    if (!(std::abs(model.joints[j].gain) > 1e-6))
-      throw std::invalid_argument("model '" + model.name + "': joint " + std::to_string(j + 1) +
-                                  " has a zero gain");
+  if (!(model.links[2].x_mm > 1.0) || !(model.links[4].z_mm > 1.0))
+    return "model '" + model.name + "': upper arm or forearm length not positive";
+  return {};
+}
+
+}  // namespace
+
+bool PumaIk::fits(const Model& model) {
+  if (!pumaChainProblem(model).empty()) return false;
+  // The closed form must land near enough for the refinement to start from it: a chain with the
+  // PUMA's joint axes but other offsets (a shoulder offset along L1.x, as the Staubli RX arms
+  // have) is not one it solves.
+  const auto [miss_mm, miss_deg] = PumaIk(model).closedFormMiss();
+  return miss_mm <= kFitsPositionMm && miss_deg <= kFitsAngleDeg;
+}
+
+std::pair<double, double> PumaIk::closedFormMiss() const {
+  const double probes[][kJointCount] = {
+      {10, -30, 40, 20, 50, 30}, {-60, -80, 150, -40, -30, 70}, {120, 20, -20, 90, 70, -100}};
+  double miss_mm = 0, miss_deg = 0;
+  for (const auto& probe : probes) {
+    const JointsDeg q = Eigen::Map<const JointsDeg>(probe);
+    const IkSolution cf = closedForm(kin_.toolPose(q), configOf(q));
+    if (cf.status != IkStatus::kOk && cf.status != IkStatus::kOutsideLimits)
+      return {INFINITY, INFINITY};
+    miss_mm = std::max(miss_mm, cf.position_error_mm);
+    miss_deg = std::max(miss_deg, cf.angle_error_deg);
+  }
+  return {miss_mm, miss_deg};
+}
+
+PumaIk::PumaIk(const Model& model) : Arm(model) {
+  if (const std::string problem = pumaChainProblem(model); !problem.empty())
+    throw std::invalid_argument(problem);
   base_inv_ = linkTransform(model.links[0]).inverse();
   tool_inv_ = linkTransform(model.links[6]).inverse();
   a2_ = model.links[2].x_mm;
   a3_ = model.links[3].x_mm;
   d3_ = model.links[3].z_mm;
   d4_ = model.links[4].z_mm;
-  if (!(a2_ > 1.0) || !(d4_ > 1.0))
-    throw std::invalid_argument("model '" + model.name +
-                                "': upper arm or forearm length not positive");
   forearm_len_ = std::hypot(a3_, d4_);
   forearm_angle_ = std::atan2(d4_, a3_);
+  exact_dh_ = closedFormMiss().first < 1e-6;
 }
 
 double PumaIk::theta(int j, double reading_deg) const {
@@ -97,37 +93,6 @@ double PumaIk::theta(int j, double reading_deg) const {
 double PumaIk::reading(int j, double theta_rad) const {
   return jointReadingDeg(model_.joints[j].offset_deg * kRadPerDeg, model_.joints[j].gain,
                          theta_rad);
-}
-
-bool PumaIk::wrapIntoLimits(JointsDeg& q, const JointsDeg* near) const {
-  bool all_inside = true;
-  for (int j = 0; j < kJointCount; ++j) {
-    const JointParams& jp = model_.joints[j];
-    const double period = 360.0 / std::abs(jp.gain);
-    const double target = near ? (*near)[j] : 0.5 * (jp.min_deg + jp.max_deg);
-    // The turn closest to the target, then the nearest turns either side of it.
-    const double base = q[j] + period * std::round((target - q[j]) / period);
-    double best = base, best_cost = INFINITY;
-    for (int k = -3; k <= 3; ++k) {
-      const double c = base + k * period;
-      const double outside = std::max({0.0, jp.min_deg - c, c - jp.max_deg});
-      const double cost = outside * 1e6 + std::abs(c - target);
-      if (cost < best_cost) {
-        best_cost = cost;
-        best = c;
-      }
-    }
-    q[j] = best;
-    if (best < jp.min_deg || best > jp.max_deg) all_inside = false;
-  }
-  return all_inside;
-}
-
-void PumaIk::measureError(IkSolution& s, const Eigen::Isometry3d& target) const {
-  const Eigen::Isometry3d pose = kin_.toolPose(s.joints_deg);
-  s.position_error_mm = (pose.translation() - target.translation()).norm();
-  const Eigen::AngleAxisd rot(target.linear() * pose.linear().transpose());
-  s.angle_error_deg = std::abs(rot.angle()) * kDegPerRad;
 }
 
 IkSolution PumaIk::closedForm(const Eigen::Isometry3d& tool_pose, const ArmConfig& config,
@@ -213,95 +178,6 @@ IkSolution PumaIk::closedForm(const Eigen::Isometry3d& tool_pose, const ArmConfi
   return s;
 }
 
-// One damped least-squares (Levenberg-Marquardt) descent of the pose error from `seed`.
-struct PumaIk::Descent {
-  JointsDeg q = JointsDeg::Zero();
-  double cost = INFINITY;  // squared error, orientation weighed by orientation_scale_mm
-  bool converged = false;  // within the refinement's tolerances
-  int iterations = 0;      // Jacobians and refused steps
-};
-
-namespace {
-
-// The pose error of `q` as (mm, orientation_scale_mm * rad), and its two parts.
-struct PoseError {
-  Eigen::Matrix<double, 6, 1> e;
-  double position_mm = 0;
-  double angle_rad = 0;
-};
-
-PoseError poseError(const Kinematics& kin, const Eigen::Isometry3d& target, const JointsDeg& q,
-                    double orientation_scale_mm) {
-  const Eigen::Isometry3d pose = kin.toolPose(q);
-  PoseError out;
-  out.e.head<3>() = target.translation() - pose.translation();
-  const Eigen::AngleAxisd rot(target.linear() * pose.linear().transpose());
-  out.e.tail<3>() = rot.axis() * (rot.angle() * orientation_scale_mm);
-  out.position_mm = out.e.head<3>().norm();
-  out.angle_rad = std::abs(rot.angle());
-  return out;
-}
-
-}  // namespace
-
-PumaIk::Descent PumaIk::descend(const Eigen::Isometry3d& target, const ArmConfig* config,
-                                const JointsDeg& seed) const {
-  const IkOptions& opt = refine_options_;
-  Descent d;
-  d.q = seed;
-  PoseError err = poseError(kin_, target, d.q, opt.orientation_scale_mm);
-  if (!err.e.allFinite()) return d;
-  d.cost = err.e.squaredNorm();
-  // Damping relative to the largest diagonal of J^T J: a Gauss-Newton step while the steps
-  // lower the error (quadratic convergence near the solution), shorter and turned towards the
-  // gradient while they do not. No step is taken that raises the error, so that the descent
-  // cannot wander, and none longer than max_step_deg in a joint.
-  double mu = 1e-9;
-  while (d.iterations < opt.max_iterations) {
-    if (err.position_mm < opt.position_tol_mm && err.angle_rad < opt.angle_tol_rad) {
-      d.converged = true;
-      return d;
-    }
-    ++d.iterations;
-    JointJacobian jac = kin_.jointJacobian(d.q);
-    jac.bottomRows<3>() *= opt.orientation_scale_mm;
-    jac *= kRadPerDeg;  // per degree of reading
-    const Eigen::Matrix<double, 6, 6> jtj = jac.transpose() * jac;
-    const Eigen::Matrix<double, 6, 1> gradient = jac.transpose() * err.e;
-    const double scale = jtj.diagonal().maxCoeff();
-    // The requested configuration's region is kept once the descent is in it: a step that
-    // crosses a singularity into another configuration counts as a failed step.
-    const bool keep_config = config && configOf(d.q) == *config;
-    bool accepted = false;
-    while (!accepted && d.iterations <= opt.max_iterations) {
-      Eigen::Matrix<double, 6, 6> a = jtj;
-      a.diagonal().array() += mu * scale;
-      Eigen::Matrix<double, 6, 1> step = a.ldlt().solve(gradient);
-      const double largest = step.cwiseAbs().maxCoeff();
-      if (!(largest > 1e-13)) break;  // no step left: stationary (or a non-finite Jacobian)
-      if (largest > opt.max_step_deg) step *= opt.max_step_deg / largest;
-      const JointsDeg next = d.q + step;
-      const PoseError next_err = poseError(kin_, target, next, opt.orientation_scale_mm);
-      const double next_cost = next_err.e.squaredNorm();
-      if (next_err.e.allFinite() && next_cost < d.cost &&
-          (!keep_config || configOf(next) == *config)) {
-        d.q = next;
-        d.cost = next_cost;
-        err = next_err;
-        mu = std::max(mu * 0.1, 1e-12);
-        accepted = true;
-      } else {
-        mu *= 10;
-        ++d.iterations;
-        if (mu > 1e12) break;
-      }
-    }
-    if (!accepted) break;  // no step lowers the error: a stationary point (or the cap)
-  }
-  d.converged = err.position_mm < opt.position_tol_mm && err.angle_rad < opt.angle_tol_rad;
-  return d;
-}
-
 std::optional<JointsDeg> PumaIk::closedFormSeed(const Eigen::Isometry3d& target,
                                                 const ArmConfig& config,
                                                 const JointsDeg& near) const {
@@ -315,8 +191,7 @@ std::optional<JointsDeg> PumaIk::closedFormSeed(const Eigen::Isometry3d& target,
     const IkSolution cf = closedForm(aim, config, &near);
     if (cf.status != IkStatus::kOk && cf.status != IkStatus::kOutsideLimits) break;
     const Eigen::Isometry3d pose = kin_.toolPose(cf.joints_deg);
-    const double cost = poseError(kin_, target, cf.joints_deg, refine_options_.orientation_scale_mm)
-                            .e.squaredNorm();
+    const double cost = poseCost(target, cf.joints_deg);
     if (!(cost < best_cost)) break;
     best = cf.joints_deg;
     best_cost = cost;
@@ -334,7 +209,7 @@ IkSolution PumaIk::refine(const Eigen::Isometry3d& tool_pose, const ArmConfig& c
     s.status = IkStatus::kUnreachable;
     return s;
   }
-  auto found = [&](const Descent& d) { return d.converged && configOf(d.q) == config; };
+  auto found = [&](const Descent& d) { return Arm::found(d, config); };
   Descent d = descend(tool_pose, &config, s.joints_deg);
   if (!found(d)) {
     // From a seed across a singularity of this model (the elbow or the shoulder plane moved
@@ -375,7 +250,14 @@ IkSolution PumaIk::refine(const Eigen::Isometry3d& tool_pose, const ArmConfig& c
 IkSolution PumaIk::solve(const Eigen::Isometry3d& tool_pose, const ArmConfig& config,
                          const JointsDeg* near) const {
   IkSolution cf = closedForm(tool_pose, config, near);
-  if (cf.status == IkStatus::kUnreachable || cf.status == IkStatus::kSingular) return cf;
+  if (cf.status == IkStatus::kUnreachable || cf.status == IkStatus::kSingular) {
+    // The closed form solves the model's DH part. A calibrated model reaches a little further or
+    // less far than that, and is singular a little elsewhere: near the edge of the reach or a
+    // singularity the closed form can say no where the model has an answer.
+    if (exact_dh_) return cf;
+    const IkSolution seeded = solveFromSeeds(tool_pose, config, near);
+    return seeded.ok() ? seeded : cf;
+  }
   if (cf.position_error_mm < 1e-6 && cf.angle_error_deg < 1e-8) return cf;  // exact DH model
   IkSolution s = refine(tool_pose, config, cf.joints_deg);
   if (s.status == IkStatus::kOutsideLimits) {  // the refinement may have crossed a limit's turn
@@ -387,12 +269,6 @@ IkSolution PumaIk::solve(const Eigen::Isometry3d& tool_pose, const ArmConfig& co
     }
   }
   return s;
-}
-
-std::array<IkSolution, kArmConfigCount> PumaIk::solveAll(const Eigen::Isometry3d& tool_pose) const {
-  std::array<IkSolution, kArmConfigCount> out;
-  for (int i = 0; i < kArmConfigCount; ++i) out[i] = solve(tool_pose, armConfigFromIndex(i));
-  return out;
 }
 
 ArmConfig PumaIk::configOf(const JointsDeg& q) const {

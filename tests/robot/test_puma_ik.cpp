@@ -2,7 +2,7 @@
 
 #include <robocal/kinematics/puma560.hpp>
 #include <robocal/kinematics/units.hpp>
-#include <robocal/planner/puma_ik.hpp>
+#include <robocal/robot/puma_ik.hpp>
 
 #include <cmath>
 #include <random>
