@@ -1,14 +1,13 @@
 // robocal plan: the off-line plan of the ball-bar shells (docs/plan-format.md).
 #include "args.hpp"
 
-#include <robocal/compensation/accuracy.hpp>
+#include <robocal/calibration/plan_pipeline.hpp>
 #include <robocal/formats/model_json.hpp>
 #include <robocal/planner/cell_json.hpp>
 #include <robocal/planner/design.hpp>
 #include <robocal/planner/health_plan.hpp>
 #include <robocal/planner/plan.hpp>
 #include <robocal/planner/plan_json.hpp>
-#include <robocal/sim/measurements.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -83,20 +82,13 @@ int run(const std::vector<std::string>& argv) {
   const bool optimal = design.budget_s > 0 || design.points > 0;
   if (optimal && check) throw UsageError("--check plans a fixed health check: no budget");
 
-  const std::vector<JointsDeg> whole_joints = wholeRangeJoints(model);
-  design.whole_range_joints = whole_joints;
+  PlanRequest request;
+  request.kind = optimal ? PlanKind::kOptimal : check ? PlanKind::kCheck : PlanKind::kGrid;
+  request.design = design;
   const auto t0 = std::chrono::steady_clock::now();
-  Plan plan;
-  CellConfig cell;
-  std::vector<JointsDeg> work_joints;
-  DesignReport design_report;
+  PlannedCell planned;
   try {
-    cell = check ? healthCheckCell(calibration_cell) : calibration_cell;
-    work_joints = workVolumeJoints(cell.work_volume, Compensator(model, model));
-    if (optimal)
-      plan = planOptimal(model, cell, work_joints, design, &design_report);
-    else
-      plan = check ? planHealthCheck(model, calibration_cell) : planCell(model, cell);
+    planned = planCalibration(model, calibration_cell, request);
   } catch (const std::invalid_argument& e) {  // the work volume is out of reach
     std::fprintf(stderr, "robocal plan: cannot plan: work_volume: %s\n", e.what());
     return 1;
@@ -106,34 +98,13 @@ int run(const std::vector<std::string>& argv) {
   }
   const double plan_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-
-  if (!check && !optimal) summarizeIdentifiability(model, plan);  // the others did
-  // A calibration plan's accuracy where the user works (a check plan is not fitted).
-  const double predicted_mm =
-      check ? -1 : predictedWorkVolumeError(model, plan, work_joints, design.noise_sigma_mm);
-  const double whole_mm =
-      check ? -1 : predictedWorkVolumeError(model, plan, whole_joints, design.noise_sigma_mm);
-  if (std::isfinite(predicted_mm)) {
-    plan.summary.predicted_work_volume_error_mm = predicted_mm;
-    if (std::isfinite(whole_mm)) plan.summary.predicted_whole_range_error_mm = whole_mm;
-    plan.summary.noise_sigma_mm = design.noise_sigma_mm;
-  }
-
-  // The forecast: the plan run by robots that differ from the model as the cell assumes. The
-  // cell's uncertainty is that of a nominal model: a check planned with a calibrated model (one
-  // with a provenance) gets none.
-  const bool forecast = !(check && model.provenance);
+  const Plan& plan = planned.plan;
+  const CellConfig& cell = planned.cell;
+  const double predicted_mm = plan.summary.predicted_work_volume_error_mm;
+  const double whole_mm = plan.summary.predicted_whole_range_error_mm;
+  const bool forecast = planned.forecast;
   const ModelUncertainty& u = cell.uncertainty;
-  PerturbationSigmas sigmas;
-  sigmas.translation_mm = u.translation_sigma_mm;
-  sigmas.link_angle_deg = u.link_angle_sigma_deg;
-  sigmas.joint_offset_deg = u.joint_offset_sigma_deg;
-  sigmas.gain = u.gain_sigma;
-  std::mt19937_64 rng(static_cast<std::uint64_t>(u.seed));
-  std::vector<Model> truths;
-  truths.reserve(static_cast<std::size_t>(std::max(0, u.models)));
-  for (int i = 0; forecast && i < u.models; ++i) truths.push_back(perturbModel(model, sigmas, rng));
-  if (forecast) predictDeflections(model, truths, plan);
+  const DesignReport& design_report = planned.design_report;
   savePlanFile(out, plan);
 
   if (!quiet) {
@@ -212,12 +183,15 @@ int run(const std::vector<std::string>& argv) {
         "warning: with that model error the bar can leave its range: run it with the "
         "model refined as data arrive (the daemon re-plans the rest of each shell), or "
         "calibrate roughly first\n");
+  char predicted_text[32];
+  std::snprintf(predicted_text, sizeof predicted_text, "%.4f mm", predicted_mm);
   if (!check)
     std::printf(
-        "work volume: predicted RMS tool position error %.4f mm after the fit (bar noise %.3f "
+        "work volume: predicted RMS tool position error %s after the fit (bar noise %.3f "
         "mm, %zu poses); cell time %.1f min: robot %.1f min, %d bar swaps %.1f min\n",
-        predicted_mm, design.noise_sigma_mm, work_joints.size(), sum.cell_time_s / 60.0,
-        sum.duration_s / 60.0, sum.shells, sum.swap_time_s / 60.0);
+        predicted_mm >= 0 ? predicted_text : "none (the plan does not identify the model)",
+        design.noise_sigma_mm, planned.work_poses, sum.cell_time_s / 60.0, sum.duration_s / 60.0,
+        sum.shells, sum.swap_time_s / 60.0);
   if (const CellTimeParts parts = cellTimeParts(plan); parts.points > 0) {
     const double n = parts.points;
     std::printf(
@@ -226,12 +200,12 @@ int run(const std::vector<std::string>& argv) {
         parts.total_s() / n, parts.dwell_s / n, parts.motion_s / n, parts.stopping_s / n,
         parts.stops / n, cell.motion.move_overhead_s, parts.swap_s / n);
   }
-  if (!check && std::isfinite(whole_mm) && std::isfinite(predicted_mm) && predicted_mm > 0)
+  if (!check && whole_mm >= 0 && predicted_mm > 0)
     std::printf(
         "whole range: predicted RMS tool position error %.4f mm after the fit over %zu joint "
         "vectors within the arm's limits (%.1fx the work volume's: what this plan does not "
         "cover)\n",
-        whole_mm, whole_joints.size(), whole_mm / predicted_mm);
+        whole_mm, planned.whole_poses, whole_mm / predicted_mm);
   if (optimal)
     std::printf("optimal: %d points chosen from %d candidates in %d round%s%s\n", sum.points,
                 design_report.candidates, design_report.rounds,

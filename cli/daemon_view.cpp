@@ -234,6 +234,18 @@ std::string planText(const proto::Plan& p) {
       << "\n";
   out << "  rank " << p.rank << ", condition number " << format("%.0f", p.condition_number)
       << ", largest deviation from a shell " << format("%.2f", p.max_deviation_mm) << " mm\n";
+  if (p.predicted_work_volume_error_mm >= 0) {
+    out << "  predicted error after the fit: " << format("%.3f", p.predicted_work_volume_error_mm)
+        << " mm RMS in the work volume";
+    if (p.predicted_whole_range_error_mm >= 0)
+      out << ", " << format("%.3f", p.predicted_whole_range_error_mm)
+          << " mm over the arm's whole range";
+    out << "\n";
+  }
+  if (p.predicted_change_mm >= 0)
+    out << "  forecast: the bar deflects up to " << format("%.2f", p.predicted_deflection_mm)
+        << " mm, changes by up to " << format("%.2f", p.predicted_change_mm)
+        << " mm from its reading at the connect pose\n";
   return out.str();
 }
 

@@ -3,6 +3,7 @@
 #include "compensate_request.hpp"
 
 #include <robocal/build_info.hpp>
+#include <robocal/calibration/plan_pipeline.hpp>
 #include <robocal/daemon/client_hub.hpp>
 #include <robocal/daemon/config.hpp>
 #include <robocal/daemon/metrics.hpp>
@@ -68,7 +69,10 @@ proto::Plan planSummary(const Plan& plan, const std::string& source) {
           s.rank,
           s.condition_number,
           s.max_deviation_mm,
-          s.predicted_deflection_mm};
+          s.predicted_deflection_mm,
+          s.predicted_change_mm,
+          s.predicted_work_volume_error_mm,
+          s.predicted_whole_range_error_mm};
 }
 json planObject(const Plan& plan, const std::string& source) {
   return proto::toJson(planSummary(plan, source));
@@ -285,7 +289,7 @@ class Daemon {
       try {
         if (check) {
           if (!cell_) throw std::runtime_error("no cell configured to plan the health check with");
-          plan = planHealthCheck(nominal_, *cell_);
+          plan = planCalibration(nominal_, *cell_, {PlanKind::kCheck, {}}).plan;
           source = "the health check of " + config_.cell;
         } else if (!path.empty()) {
           plan = loadPlanFile(path);
@@ -295,8 +299,7 @@ class Daemon {
                                   : cell_
                                       ? *cell_
                                       : throw std::runtime_error("no cell configured to plan with");
-          plan = planCell(nominal_, cell);
-          summarizeIdentifiability(nominal_, *plan);
+          plan = planCalibration(nominal_, cell, {PlanKind::kGrid, {}}).plan;
           source = !cell_path.empty() ? cell_path : config_.cell;
         }
         const auto violations = checkPlan(nominal_, cell_ ? *cell_ : plan->cell, *plan);

@@ -309,27 +309,37 @@ void ShellRunner::verifyConnection(const ShellPlan& shell, JointsDeg& q) {
   // failed the check. The pre-point keeps the bar's length (one joint steps back further, as the
   // planner's approach does: the plain step changed it by 0.3 mm at the main job's connect pose
   // and was skipped). Where no joint can undo the step (every joint's step back shortens the bar,
-  // as at the top of a shell) the pre-point changes the bar: it is taken inside the joint limits
-  // and where the model predicts a change no larger than the check's own step (step_mm, which the
-  // check commands anyway), else the check reads that pose as it comes, and says so in the log.
-  bool logged_skip = false;
+  // as at the top of a shell) and the pre-point would change the bar by more than the check's own
+  // step (step_mm, which the check commands anyway), the joints step back and up a group at a time
+  // (approachStages: a big arm's 0.02 deg moved an RX160's ball 0.67 mm, and the check skipped
+  // its pre-point and failed a correct bar on backlash). Pre-points outside the joint limits are
+  // not taken: the check then reads that pose as it comes. The log says when either happens.
+  bool logged = false;
   const Model& model = centring_.model();
+  const Kinematics kin(model);
   const auto moveUpTo = [&](const JointsDeg& target) {
-    const JointsDeg pre =
-        approachPrePoint(Kinematics(model), model.balls_mm[shell.connection.ball_index],
-                         model.chucks_mm[shell.connection.chuck_index], target, kCheckApproachDeg);
+    std::vector<int> left_out;
+    std::vector<JointsDeg> stages = approachStages(kin, model.balls_mm[shell.connection.ball_index],
+                                                   model.chucks_mm[shell.connection.chuck_index],
+                                                   target, kCheckApproachDeg, step_mm, left_out);
     bool inside = true;
-    for (int j = 0; j < kJointCount; ++j) inside = inside && pre[j] >= model.joints[j].min_deg;
-    const double change_mm =
-        barLengthMm(model, shell.connection, pre) - barLengthMm(model, shell.connection, target);
-    if (inside && std::abs(change_mm) <= step_mm) {
+    for (const JointsDeg& pre : stages)
+      for (int j = 0; j < kJointCount; ++j) inside = inside && pre[j] >= model.joints[j].min_deg;
+    if (!inside) stages.clear();
+    if (!logged && (stages.size() != 1 || !left_out.empty())) {
+      logged = true;
+      json left_out_joints = json::array();
+      for (int j : left_out) left_out_joints.push_back(j + 1);
+      ctx_.event(dir_,
+                 {{"event", stages.empty() ? "check_pre_point_skipped" : "check_pre_point_staged"},
+                  {"shell", shell.shell},
+                  {"stages", stages.size()},
+                  {"left_out_joints", left_out_joints},
+                  {"inside_limits", inside}});
+    }
+    for (const JointsDeg& pre : stages) {
       ctx_.move(pre, true);
-    } else if (!logged_skip) {
-      logged_skip = true;
-      ctx_.event(dir_, {{"event", "check_pre_point_skipped"},
-                        {"shell", shell.shell},
-                        {"predicted_change_mm", change_mm},
-                        {"inside_limits", inside}});
+      ctx_.move(target, true);
     }
     return ctx_.move(target, true);
   };

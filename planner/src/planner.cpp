@@ -421,6 +421,39 @@ JointsDeg approachPrePoint(const Kinematics& kin, const Eigen::Vector3d& ball,
   return pre_q;
 }
 
+std::vector<JointsDeg> approachStages(const Kinematics& kin, const Eigen::Vector3d& ball,
+                                      const Eigen::Vector3d& chuck, const JointsDeg& q,
+                                      double step_deg, double max_change_mm,
+                                      std::vector<int>& left_out) {
+  left_out.clear();
+  const double at_q = kin.barLength(q, ball, chuck);
+  const auto keeps = [&](const JointsDeg& pre) {
+    return std::abs(kin.barLength(pre, ball, chuck) - at_q) <= max_change_mm;
+  };
+  const JointsDeg single = approachPrePoint(kin, ball, chuck, q, step_deg);
+  if (keeps(single)) return {single};
+  std::vector<JointsDeg> stages;
+  JointsDeg group = q;
+  for (int j = 0; j < kJointCount; ++j) {
+    JointsDeg alone = q;
+    alone[j] -= step_deg;
+    if (!keeps(alone)) {
+      left_out.push_back(j);
+      continue;
+    }
+    JointsDeg grown = group;
+    grown[j] -= step_deg;
+    if (keeps(grown)) {
+      group = grown;
+    } else {
+      stages.push_back(group);
+      group = alone;
+    }
+  }
+  if (group != q) stages.push_back(group);
+  return stages;
+}
+
 bool ShellPlanner::planApproach(const Connection& c, double radius, const ArmConfig& config,
                                 const Node& a, const Node& b, std::vector<PlanStep>& vias,
                                 double& worst, std::string& why) const {

@@ -354,7 +354,10 @@ json toJson(const Plan& o) {
           {"rank", o.rank},
           {"condition_number", o.condition_number},
           {"max_deviation_mm", o.max_deviation_mm},
-          {"predicted_deflection_mm", o.predicted_deflection_mm}};
+          {"predicted_deflection_mm", o.predicted_deflection_mm},
+          {"predicted_change_mm", o.predicted_change_mm},
+          {"predicted_work_volume_error_mm", o.predicted_work_volume_error_mm},
+          {"predicted_whole_range_error_mm", o.predicted_whole_range_error_mm}};
 }
 template <>
 Plan parseObject<Plan>(const json& j) {
@@ -370,6 +373,9 @@ Plan parseObject<Plan>(const json& j) {
   p.condition_number = r.number("condition_number");
   p.max_deviation_mm = r.number("max_deviation_mm");
   p.predicted_deflection_mm = r.number("predicted_deflection_mm");
+  p.predicted_change_mm = r.number("predicted_change_mm");
+  p.predicted_work_volume_error_mm = r.number("predicted_work_volume_error_mm");
+  p.predicted_whole_range_error_mm = r.number("predicted_whole_range_error_mm");
   return p;
 }
 

@@ -450,4 +450,9 @@ TEST_CASE("SIGTERM while a plan is being made stops the daemon cleanly", "[e2e][
   INFO(plan.dump());
   REQUIRE(plan["class"] == "PLAN");
   CHECK(plan["rank"].get<int>() > 0);
+  // The same plan pipeline as robocal plan: its predicted errors and forecast come with it.
+  CHECK(plan["predicted_work_volume_error_mm"].get<double>() > 0);
+  CHECK(plan["predicted_whole_range_error_mm"].get<double>() >
+        plan["predicted_work_volume_error_mm"].get<double>());
+  CHECK(plan["predicted_change_mm"].get<double>() > 0);
 }

@@ -30,7 +30,8 @@ Prompt fullPrompt() {
           "Connect ball 1 to chuck 3 with the 150 mm extension, then confirm."};
 }
 Plan fullPlan() {
-  return {"/etc/robocald/cell.json", 18, 1714, 40, 2, 5400.5, 36, 812.0, 0.42, 0.031};
+  return {
+      "/etc/robocald/cell.json", 18, 1714, 40, 2, 5400.5, 36, 812.0, 0.42, 0.031, 0.9, 0.047, 0.55};
 }
 Status fullStatus() {
   Status s;

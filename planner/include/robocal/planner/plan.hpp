@@ -42,6 +42,18 @@ struct PlanStep {
 JointsDeg approachPrePoint(const Kinematics& kin, const Eigen::Vector3d& ball,
                            const Eigen::Vector3d& chuck, const JointsDeg& q, double step_deg);
 
+// The pre-points that bring the joints up into `q` from `step_deg` below when the bar's length
+// may change by at most `max_change_mm` at a pre-point (the daemon's connection check): the one
+// of approachPrePoint when it keeps to that; else the joints step back and up again a group at a
+// time (joints 1, 2, ... gathered while the group's pre-point keeps to it), so that a big arm,
+// whose 0.02 deg moves the ball more than the check's own step, still has every joint's backlash
+// on the same side. The caller moves to each pre-point and back to `q` in turn. A joint whose own
+// step changes the bar by more than max_change_mm is left out: `left_out` lists them (0-based).
+std::vector<JointsDeg> approachStages(const Kinematics& kin, const Eigen::Vector3d& ball,
+                                      const Eigen::Vector3d& chuck, const JointsDeg& q,
+                                      double step_deg, double max_change_mm,
+                                      std::vector<int>& left_out);
+
 struct DroppedPoint {
   double lat_deg = 0, lon_deg = 0;
   std::string reason;

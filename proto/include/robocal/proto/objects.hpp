@@ -166,6 +166,12 @@ struct Plan {
   double condition_number = 0;
   double max_deviation_mm = 0;
   double predicted_deflection_mm = -1;  // worst over shells; < 0: not computed
+  double predicted_change_mm = -1;      // from the connect pose's reading, worst over shells
+  // The calibrated model's predicted RMS tool position error where the user works (the cell's
+  // work volume) and over the arm's whole range (a check plan is not fitted: < 0, as for a
+  // plan file that does not say).
+  double predicted_work_volume_error_mm = -1;
+  double predicted_whole_range_error_mm = -1;
   bool operator==(const Plan&) const = default;
 };
 
