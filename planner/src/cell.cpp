@@ -88,7 +88,7 @@ void validateCell(const CellConfig& c) {
 
   if (c.arm_configuration != "auto" && !parseArmConfig(c.arm_configuration))
     bad("arm_configuration",
-        "'" + c.arm_configuration + "' is neither auto nor a configuration like right-up-noflip");
+        "'" + c.arm_configuration + "' is neither auto nor one of " + armConfigNames());
   inRange("connect.lat_deg", c.connect_lat_deg, 0, 90);
   inRange("connect.lon_deg", c.connect_lon_deg, -360, 360);
 

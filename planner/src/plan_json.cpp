@@ -242,7 +242,9 @@ Plan planFromJson(const json& root, const std::string& source) {
     sh.radius_mm = r.number(o, where, "radius_mm");
     const std::string config = r.string(o, where, "arm_configuration");
     const auto parsed = parseArmConfig(config);
-    if (!parsed) r.fail(where + ".arm_configuration", "unknown configuration \"" + config + "\"");
+    if (!parsed)
+      r.fail(where + ".arm_configuration",
+             "unknown configuration \"" + config + "\" (one of " + armConfigNames() + ")");
     sh.config = *parsed;
     sh.connect = r.step(r.member(o, where, "connect"), where + ".connect", false);
     const json& steps = r.array(o, where, "steps");

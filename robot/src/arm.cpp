@@ -66,6 +66,13 @@ std::optional<ArmConfig> parseArmConfig(const std::string& name) {
   return std::nullopt;
 }
 
+std::string armConfigNames() {
+  std::string names;
+  for (int i = 0; i < kArmConfigCount; ++i)
+    names += (i ? ", " : "") + armConfigName(armConfigFromIndex(i));
+  return names;
+}
+
 const char* ikStatusName(IkStatus status) {
   switch (status) {
     case IkStatus::kOk:

@@ -45,7 +45,8 @@ TEST_CASE("approach stages: one pre-point when it keeps the bar, groups of joint
   const Model rx160 = loadModelFile(ROBOCAL_SOURCE_DIR "/config/rx160.json");
   const Kinematics kin(rx160);
   const Eigen::Vector3d ball = rx160.balls_mm[2], chuck = rx160.chucks_mm[0];
-  // The RX160 reaching over a chuck, as at shell 7's connect pose of its main job (B3C1, 45 deg latitude).
+  // The RX160 reaching over a chuck, as at shell 7's connect pose of its main job (B3C1, 45 deg
+  // latitude).
   JointsDeg q;
   q << -10.063, -46.566, -113.323, -52.106, 18.305, -108.864;
   const double step = 0.02;

@@ -57,6 +57,9 @@ TEST_CASE("bad cell files give an error naming the key") {
   CHECK(errorOf(R"({"connections": ["B1C1", "B1C1"]})").find("twice") != std::string::npos);
   CHECK(errorOf(R"({"arm_configuration": "sideways"})").find("arm_configuration") !=
         std::string::npos);
+  // The refusal names the configurations there are.
+  CHECK(errorOf(R"({"arm_configuration": "sideways"})").find("right-up-noflip, right-up-flip") !=
+        std::string::npos);
   CHECK(errorOf(R"({"margins": {"wrist_singularity_deg": -1}})")
             .find("margins.wrist_singularity_deg") != std::string::npos);
   CHECK(errorOf(R"({"motion": {"sample_step_mm": 5}})").find("motion.sample_step_mm") !=

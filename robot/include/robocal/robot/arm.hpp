@@ -43,6 +43,8 @@ int armConfigIndex(const ArmConfig& config);
 std::string armConfigName(const ArmConfig& config);
 // Inverse of armConfigName; nullopt for an unknown name.
 std::optional<ArmConfig> parseArmConfig(const std::string& name);
+// The eight names, comma-separated in armConfigFromIndex order (for messages).
+std::string armConfigNames();
 
 enum class IkStatus {
   kOk,
