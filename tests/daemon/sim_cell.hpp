@@ -32,6 +32,15 @@ inline std::vector<double> testTimeScales() {
 #endif
 }
 
+// How many events of this name a run's log holds.
+inline int countEvents(const std::string& run_dir, const std::string& name) {
+  std::ifstream in(run_dir + "/events.jsonl");
+  int n = 0;
+  for (std::string line; std::getline(in, line);)
+    n += nlohmann::json::parse(line).value("event", "") == name;
+  return n;
+}
+
 struct Cell {
   TempDir dir;
   std::string truth_path;
@@ -44,13 +53,14 @@ struct Cell {
 
   // `daemon_keys` replace or add robocald config keys; `sim_args` are added to cellsim's (a later
   // option wins); `drivers_json` (a drivers config, e.g. a dialect) is given to both cellsim and
-  // robocald.
+  // robocald; `model` is the arm's nominal model (the truth is it perturbed).
   Cell(const std::vector<std::string>& connections, unsigned seed, bool centering = true,
        double lon_step_deg = 60, double time_scale = 50,
        const nlohmann::json& daemon_keys = nlohmann::json::object(),
-       const std::vector<std::string>& sim_args = {}, const std::string& drivers_json = "") {
+       const std::vector<std::string>& sim_args = {}, const std::string& drivers_json = "",
+       const std::string& model = kModel) {
     truth_path = dir / "truth.json";
-    const auto r = runRobocal("simulate --model " + kModel + " --seed " + std::to_string(seed) +
+    const auto r = runRobocal("simulate --model " + model + " --seed " + std::to_string(seed) +
                               " --connections B1C1 --points-per-shell 1 --out " + (dir / "x.csv") +
                               " --truth-out " + truth_path);
     REQUIRE(r.exit_code == 0);
@@ -65,7 +75,7 @@ struct Cell {
     nlohmann::json drivers = drivers::toJson(sim->driversConfig());
     drivers["bar"]["mode"] = "streamed";
     drivers["val"]["poll_interval_s"] = 0.01;
-    nlohmann::json config{{"model", kModel},          {"cell", dir / "cell.json"},
+    nlohmann::json config{{"model", model},           {"cell", dir / "cell.json"},
                           {"settle_s", 0.02},         {"bar_window_s", 0.03},
                           {"bar_soft_limit_mm", 1.0}, {"bar_hard_limit_mm", 1.6},
                           {"centering", centering},   {"drivers", drivers}};

@@ -20,13 +20,6 @@ using Catch::Matchers::Contains;
 
 namespace {
 
-int countEvents(const std::string& run_dir, const std::string& name) {
-  std::ifstream in(run_dir + "/events.jsonl");
-  int n = 0;
-  for (std::string line; std::getline(in, line);) n += json::parse(line).value("event", "") == name;
-  return n;
-}
-
 // Confirms the pending prompt without doing what it asked (after `control` set up the cell).
 bool confirmAnyway(Cell& cell, proto::Client& c, const json& prompt, const std::string& control) {
   REQUIRE_THAT(cell.sim->control(control), Contains("ok"));
