@@ -61,16 +61,20 @@ std::string realismSummary(const TrueRobot& truth, const std::vector<Sample>& sa
       if (t > twist_deg) twist_deg = t, joint = j + 1;
     }
   }
+  char gravity[96] = "no gravity compliance (the model gives no link masses)";
+  if (truth.realism.compliance.twists())
+    std::snprintf(gravity, sizeof gravity,
+                  "gravity compliance up to %.3g deg (joint %d) with a %.3g kg payload", twist_deg,
+                  joint, truth.realism.compliance.load.payload_kg);
   char buf[320];
   std::snprintf(
       buf, sizeof buf,
-      "realism: backlash up to %.3g deg; gravity compliance up to %.3g deg (joint %d) "
-      "with a %.3g kg payload; warm-up %.3g K (tau %.3g min); LVDT gain error %.3g, "
-      "nonlinearity %.3g mm; bar length error %.3g",
+      "realism: backlash up to %.3g deg; %s; warm-up %.3g K (tau %.3g min); LVDT gain error "
+      "%.3g, nonlinearity %.3g mm; bar length error %.3g",
       *std::max_element(truth.realism.backlash_deg.begin(), truth.realism.backlash_deg.end()),
-      twist_deg, joint, truth.realism.compliance.load.payload_kg, truth.realism.warmup_k,
-      truth.realism.warmup_time_constant_min, truth.realism.lvdt_gain_error,
-      truth.realism.lvdt_nonlinearity_mm, truth.realism.bar_length_error);
+      gravity, truth.realism.warmup_k, truth.realism.warmup_time_constant_min,
+      truth.realism.lvdt_gain_error, truth.realism.lvdt_nonlinearity_mm,
+      truth.realism.bar_length_error);
   return buf;
 }
 
@@ -97,7 +101,13 @@ int run(const std::vector<std::string>& argv) {
   TrueRobot true_robot =
       args.has("truth") ? loadTruthFile(args.get("truth", ""))
                         : TrueRobot{perturbModel(nominal, sigmas, truth_rng), Realism::ideal()};
-  if (args.has("realism")) true_robot.realism = realismNamed(args.get("realism", ""));
+  if (args.has("realism")) {
+    // The arm's masses: the truth file's, else the nominal model's.
+    const GravityLoad arm_load = args.has("truth")    ? true_robot.realism.compliance.load
+                                 : nominal.compliance ? nominal.compliance->load
+                                                      : GravityLoad{};
+    true_robot.realism = realismNamed(args.get("realism", ""), arm_load);
+  }
   const Model& truth = true_robot.model;
   RunTrack track;
   track.minutes_per_point = args.number("minutes-per-point", track.minutes_per_point);

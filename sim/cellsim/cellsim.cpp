@@ -861,7 +861,7 @@ void accept(asio::local::stream_protocol::acceptor& acceptor, Cell& cell) {
 
 int run(const Options& o) {
   TrueRobot truth = loadTruthFile(o.model_path);
-  if (!o.realism.empty()) truth.realism = realismNamed(o.realism);
+  if (!o.realism.empty()) truth.realism = realismNamed(o.realism, truth.realism.compliance.load);
   const drivers::DriversConfig config =
       o.config_path.empty() ? drivers::DriversConfig{} : drivers::loadDriversConfig(o.config_path);
   asio::io_context io;

@@ -5,14 +5,18 @@
 #include <cmath>
 
 namespace robocal {
-Realism Realism::puma560Typical() {
+Realism Realism::typical(const GravityLoad& arm_load) {
   Realism r;
   r.backlash_deg = {0.01, 0.01, 0.01, 0.01, 0.01, 0.01};
-  // A PUMA 560's links with the ball fixture: 1 kg, 60 mm past the flange.
-  r.compliance.load = puma560GravityLoad(1.0, Eigen::Vector3d(0, 0, 60));
-  // About 0.03 deg at the largest gravity torque of joints 2 and 3 with the fixture (robocal
-  // simulate prints the largest twist), the wrist's much stiffer in proportion to its torques.
-  r.compliance.deg_per_nm = {0.0, 7.0e-4, 1.5e-3, 2.0e-3, 2.0e-3, 2.0e-3};
+  bool has_mass = arm_load.payload_kg > 0;
+  for (double m : arm_load.link_mass_kg) has_mass = has_mass || m > 0;
+  if (has_mass) {
+    r.compliance.load = arm_load;
+    // About 0.03 deg at the largest gravity torque of a PUMA's joints 2 and 3 with the fixture
+    // (robocal simulate prints the largest twist), the wrist's much stiffer in proportion to its
+    // torques.
+    r.compliance.deg_per_nm = {0.0, 7.0e-4, 1.5e-3, 2.0e-3, 2.0e-3, 2.0e-3};
+  }
   r.warmup_k = 3.0;
   r.lvdt_gain_error = 1e-4;
   r.lvdt_nonlinearity_mm = 0.0075;

@@ -58,7 +58,10 @@ TrueRobot loadTruthFile(const std::string& path) {
   t.model = modelFromJson(root, path);
   if (t.model.compliance && t.model.compliance->twists())
     throw FormatError(path + ": compliance: a truth's compliance goes in its \"realism\"");
-  t.model.compliance.reset();  // the realism twists the true robot, not its model
+  // The realism twists the true robot, not its model; what gravity pulls on stays in the
+  // realism (not twisting) for a --realism named later (realismNamed).
+  if (t.model.compliance) t.realism.compliance.load = t.model.compliance->load;
+  t.model.compliance.reset();
   if (root.is_object())
     if (const auto it = root.find("realism"); it != root.end())
       t.realism = realismFromJson(*it, path);
@@ -69,9 +72,9 @@ Realism loadRealismFile(const std::string& path) {
   return realismFromJson(parseJsonFile(path), path);
 }
 
-Realism realismNamed(const std::string& ideal_typical_or_path) {
+Realism realismNamed(const std::string& ideal_typical_or_path, const GravityLoad& arm_load) {
   if (ideal_typical_or_path == "ideal") return Realism::ideal();
-  if (ideal_typical_or_path == "typical") return Realism::puma560Typical();
+  if (ideal_typical_or_path == "typical") return Realism::typical(arm_load);
   return loadRealismFile(ideal_typical_or_path);
 }
 

@@ -32,7 +32,7 @@ JointsDeg joints(double a, double b, double c, double d, double e, double f) {
 TEST_CASE("true robot: the ideal one is exactly its model; each effect has its size and sign") {
   const Model model = puma560NominalModel();
   const TrueRobot ideal{model, Realism::ideal()};
-  const TrueRobot typical{model, Realism::puma560Typical()};
+  const TrueRobot typical{model, Realism::typical(puma560NominalModel().compliance->load)};
   const JointsDeg q = joints(10, 30, -160, 20, 40, 30);
   CHECK(ideal.effectiveReadings(q, kPositiveApproach) == q);
   CHECK(ideal.measuredLength(150.3, 150) == 150.3);
@@ -107,7 +107,8 @@ TEST_CASE("true robot: an ideal run measures what the model says, a typical one 
   const auto exact = measureShell(model, req, poses.poses, {0, 0}, a);
   RunTrack track;
   const auto typical =
-      measureShell(TrueRobot{model, Realism::puma560Typical()}, req, poses.poses, {0, 0}, b, track);
+      measureShell(TrueRobot{model, Realism::typical(puma560NominalModel().compliance->load)}, req,
+                   poses.poses, {0, 0}, b, track);
   REQUIRE(exact.size() == typical.size());
   double worst = 0;
   for (size_t i = 0; i < exact.size(); ++i) {
@@ -124,7 +125,7 @@ TEST_CASE("truth file: realism round-trips, model readers ignore it, bad keys ar
   const int fd = ::mkstemp(path);
   REQUIRE(fd >= 0);
   ::close(fd);
-  TrueRobot t{puma560NominalModel(), Realism::puma560Typical()};
+  TrueRobot t{puma560NominalModel(), Realism::typical(puma560NominalModel().compliance->load)};
   t.realism.bar_length_error = 2e-5;
   saveTruthFile(path, t);
   const TrueRobot back = loadTruthFile(path);
@@ -150,7 +151,7 @@ TEST_CASE("a model with compliance twists its joints as the true robot's complia
   rigid.joints[1].gain = 1.002;  // the twist is an angle: divided by the gain in the readings
   rigid.joints[2].gain = 0.997;
   TrueRobot truth{rigid, Realism::ideal()};
-  truth.realism.compliance = Realism::puma560Typical().compliance;
+  truth.realism.compliance = Realism::typical(puma560NominalModel().compliance->load).compliance;
   Model compliant = rigid;
   compliant.compliance = truth.realism.compliance;
   const Kinematics rigid_kin(rigid), compliant_kin(compliant);

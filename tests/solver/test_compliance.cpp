@@ -6,6 +6,7 @@
 #include "fit_fixtures.hpp"
 
 #include <robocal/kinematics/kinematics.hpp>
+#include <robocal/kinematics/puma560.hpp>
 #include <robocal/solver/assessment.hpp>
 
 #include <cmath>
@@ -58,7 +59,7 @@ TEST_CASE("compliance: the twist of the loaded joints is identified, and only wh
   const Model nominal = puma560NominalModel();
   const Model geometry = perturbed(1.0, 31);
   Realism twisting = Realism::ideal();
-  twisting.compliance = Realism::puma560Typical().compliance;
+  twisting.compliance = Realism::typical(puma560NominalModel().compliance->load).compliance;
   const double noise_mm = 0.02;
   AssessOptions with;
   with.identify_compliance = true;

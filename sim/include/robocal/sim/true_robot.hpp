@@ -42,11 +42,12 @@ struct Realism {
   double bar_length_error = 0;
 
   static Realism ideal() { return {}; }
-  // The middle of the sizes docs/realism.md cites: backlash 0.01 deg, a PUMA 560's link masses
-  // with a 1 kg fixture and compliances that twist joints 2 and 3 by about 0.03 deg at their
-  // largest torque, a 3 K warm-up (30 min), an LVDT with 1e-4 gain error and 7.5 um of
-  // nonlinearity.
-  static Realism puma560Typical();
+  // The middle of the sizes docs/realism.md cites: backlash 0.01 deg, the arm's link masses and
+  // its fixture (`arm_load`: the nominal model's compliance load; the PUMA 560's, with a 1 kg
+  // fixture, gives joints 2 and 3 about 0.03 deg of twist at their largest torque) with the
+  // compliances found for the PUMA, a 3 K warm-up (30 min), an LVDT with 1e-4 gain error and
+  // 7.5 um of nonlinearity. An arm whose model gives no masses gets no gravity compliance.
+  static Realism typical(const GravityLoad& arm_load);
   bool isIdeal() const;
 };
 

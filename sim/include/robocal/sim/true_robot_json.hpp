@@ -19,8 +19,9 @@ nlohmann::ordered_json realismToJson(const Realism& realism);
 TrueRobot loadTruthFile(const std::string& path);
 // A file holding a JSON object of realism keys alone (robocal simulate --realism FILE).
 Realism loadRealismFile(const std::string& path);
-// What a --realism option names: "ideal", "typical" (Realism::puma560Typical) or a realism file.
-Realism realismNamed(const std::string& ideal_typical_or_path);
+// What a --realism option names: "ideal", "typical" (Realism::typical with the arm's masses,
+// `arm_load`) or a realism file.
+Realism realismNamed(const std::string& ideal_typical_or_path, const GravityLoad& arm_load);
 void saveTruthFile(const std::string& path, const TrueRobot& truth);
 
 }  // namespace robocal
