@@ -1,5 +1,7 @@
 #include <catch2/catch.hpp>
 
+#include "arms.hpp"
+
 #include <robocal/kinematics/puma560.hpp>
 #include <robocal/kinematics/units.hpp>
 #include <robocal/robot/puma_ik.hpp>
@@ -8,6 +10,7 @@
 #include <random>
 
 using namespace robocal;
+using robocal::test::randomRegularJoints;
 
 namespace {
 
@@ -19,19 +22,6 @@ JointsDeg deg(double a, double b, double c, double d, double e, double f) {
 
 double angleBetweenDeg(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
   return std::abs(Eigen::AngleAxisd(a * b.transpose()).angle()) * kDegPerRad;
-}
-
-// Random readings inside the limits, away from the three singularities.
-JointsDeg randomRegularJoints(const PumaIk& ik, std::mt19937_64& rng) {
-  for (;;) {
-    JointsDeg q;
-    for (int j = 0; j < kJointCount; ++j) {
-      const JointParams& jp = ik.model().joints[j];
-      q[j] = std::uniform_real_distribution<double>(jp.min_deg + 1, jp.max_deg - 1)(rng);
-    }
-    const SingularityMargins m = ik.singularityMargins(q);
-    if (m.wrist_deg > 2 && m.elbow_deg > 2 && m.shoulder_mm > 5) return q;
-  }
 }
 
 }  // namespace
