@@ -17,7 +17,7 @@
 // robocal is timed twice per repeat: a whole solve ("robocal"), and a refit of the same plan
 // whose identifiability analysis comes from an IdentifiabilityCache ("robocal refit").
 #include <robocal/kinematics/kinematics.hpp>
-#include <robocal/kinematics/puma560.hpp>
+#include <robocal/robot/puma560.hpp>
 #include <robocal/sim/measurements.hpp>
 #include <robocal/solver/calibrate.hpp>
 #include <robocal/solver/identifiability.hpp>

@@ -2,7 +2,7 @@
 
 #include <robocal/formats/csv.hpp>
 #include <robocal/formats/model_json.hpp>
-#include <robocal/kinematics/puma560.hpp>
+#include <robocal/robot/puma560.hpp>
 
 #include <cmath>
 #include <cstdio>

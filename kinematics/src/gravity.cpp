@@ -29,16 +29,4 @@ std::array<double, kJointCount> gravityTorqueNm(const ChainFrames& frames,
   return torque;
 }
 
-GravityLoad puma560GravityLoad(double payload_kg, const Eigen::Vector3d& payload_com_mm) {
-  GravityLoad g;
-  // Link 1 turns about the vertical: no gravity torque. Centres in m there, mm here.
-  g.link_mass_kg = {0.0, 17.4, 4.8, 0.82, 0.34, 0.09};
-  g.link_com_mm = {Eigen::Vector3d(0, 0, 0),          Eigen::Vector3d(-363.8, 6, 227.5),
-                   Eigen::Vector3d(-20.3, -14.1, 70), Eigen::Vector3d(0, 19, 0),
-                   Eigen::Vector3d(0, 0, 0),          Eigen::Vector3d(0, 0, 32)};
-  g.payload_kg = payload_kg;
-  g.payload_com_mm = payload_com_mm;
-  return g;
-}
-
 }  // namespace robocal

@@ -8,8 +8,8 @@
 #include <robocal/compensation/targets.hpp>
 #include <robocal/formats/model_json.hpp>
 #include <robocal/formats/program.hpp>
-#include <robocal/kinematics/puma560.hpp>
 #include <robocal/planner/cell_json.hpp>
+#include <robocal/robot/puma560.hpp>
 #include <robocal/robot/puma_ik.hpp>
 #include <robocal/sim/measurements.hpp>
 #include <robocal/solver/calibrate.hpp>

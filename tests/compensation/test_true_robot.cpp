@@ -6,7 +6,7 @@
 #include <robocal/formats/error.hpp>
 #include <robocal/formats/model_json.hpp>
 #include <robocal/kinematics/kinematics.hpp>
-#include <robocal/kinematics/puma560.hpp>
+#include <robocal/robot/puma560.hpp>
 #include <robocal/sim/measurements.hpp>
 #include <robocal/sim/true_robot_json.hpp>
 

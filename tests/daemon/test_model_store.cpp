@@ -5,7 +5,7 @@
 #include "../cli/cli_helpers.hpp"
 
 #include <robocal/daemon/model_store.hpp>
-#include <robocal/kinematics/puma560.hpp>
+#include <robocal/robot/puma560.hpp>
 
 #include <fstream>
 

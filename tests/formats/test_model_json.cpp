@@ -2,7 +2,7 @@
 
 #include <robocal/formats/model_json.hpp>
 #include <robocal/formats/report.hpp>
-#include <robocal/kinematics/puma560.hpp>
+#include <robocal/robot/puma560.hpp>
 
 #include <nlohmann/json.hpp>
 

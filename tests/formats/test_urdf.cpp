@@ -5,8 +5,8 @@
 #include <robocal/formats/error.hpp>
 #include <robocal/formats/urdf.hpp>
 #include <robocal/kinematics/kinematics.hpp>
-#include <robocal/kinematics/puma560.hpp>
 #include <robocal/kinematics/units.hpp>
+#include <robocal/robot/puma560.hpp>
 
 #include "urdf_fk.hpp"
 

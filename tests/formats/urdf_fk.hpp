@@ -5,7 +5,7 @@
 #include <catch2/catch.hpp>
 
 #include <robocal/kinematics/kinematics.hpp>
-#include <robocal/kinematics/puma560.hpp>
+#include <robocal/robot/puma560.hpp>
 
 #include <urdf_parser/urdf_parser.h>
 

@@ -4,7 +4,7 @@
 
 #include <robocal/kinematics/dh.hpp>
 #include <robocal/kinematics/kinematics.hpp>
-#include <robocal/kinematics/puma560.hpp>
+#include <robocal/robot/puma560.hpp>
 
 #include <random>
 

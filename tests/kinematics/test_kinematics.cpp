@@ -2,8 +2,8 @@
 
 #include <robocal/kinematics/ik.hpp>
 #include <robocal/kinematics/kinematics.hpp>
-#include <robocal/kinematics/puma560.hpp>
 #include <robocal/kinematics/units.hpp>
+#include <robocal/robot/puma560.hpp>
 
 #include <random>
 

@@ -3,8 +3,8 @@
 #include <catch2/catch.hpp>
 
 #include <robocal/formats/model_json.hpp>
-#include <robocal/kinematics/puma560.hpp>
 #include <robocal/planner/plan.hpp>
+#include <robocal/robot/puma560.hpp>
 
 #include <set>
 

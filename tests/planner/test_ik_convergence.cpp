@@ -5,8 +5,8 @@
 #include <catch2/catch.hpp>
 
 #include <robocal/compensation/compensate.hpp>
-#include <robocal/kinematics/puma560.hpp>
 #include <robocal/kinematics/units.hpp>
+#include <robocal/robot/puma560.hpp>
 #include <robocal/robot/puma_ik.hpp>
 #include <robocal/sim/measurements.hpp>
 

@@ -4,11 +4,11 @@
 
 #include <robocal/formats/model_json.hpp>
 #include <robocal/formats/samples_csv.hpp>
-#include <robocal/kinematics/puma560.hpp>
 #include <robocal/planner/cell_json.hpp>
 #include <robocal/planner/check.hpp>
 #include <robocal/planner/plan.hpp>
 #include <robocal/planner/plan_json.hpp>
+#include <robocal/robot/puma560.hpp>
 #include <robocal/robot/puma_ik.hpp>
 #include <robocal/sim/measurements.hpp>
 

@@ -4,9 +4,9 @@
 // inverse kinematics serves it).
 #pragma once
 
-#include <robocal/kinematics/puma560.hpp>
 #include <robocal/kinematics/units.hpp>
 #include <robocal/robot/arm.hpp>
+#include <robocal/robot/puma560.hpp>
 
 #include <random>
 #include <string>

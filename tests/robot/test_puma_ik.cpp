@@ -2,8 +2,8 @@
 
 #include "arms.hpp"
 
-#include <robocal/kinematics/puma560.hpp>
 #include <robocal/kinematics/units.hpp>
+#include <robocal/robot/puma560.hpp>
 #include <robocal/robot/puma_ik.hpp>
 
 #include <cmath>

@@ -2,7 +2,7 @@
 // PUMA 560, measured on a perturbed true robot with Gaussian noise.
 #pragma once
 
-#include <robocal/kinematics/puma560.hpp>
+#include <robocal/robot/puma560.hpp>
 #include <robocal/sim/measurements.hpp>
 
 #include <random>

@@ -1,8 +1,8 @@
 #include <catch2/catch.hpp>
 
 #include <robocal/kinematics/kinematics.hpp>
-#include <robocal/kinematics/puma560.hpp>
 #include <robocal/kinematics/units.hpp>
+#include <robocal/robot/puma560.hpp>
 #include <robocal/sim/measurements.hpp>
 #include <robocal/solver/assessment.hpp>
 #include <robocal/solver/calibrate.hpp>

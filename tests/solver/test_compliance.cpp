@@ -6,7 +6,7 @@
 #include "fit_fixtures.hpp"
 
 #include <robocal/kinematics/kinematics.hpp>
-#include <robocal/kinematics/puma560.hpp>
+#include <robocal/robot/puma560.hpp>
 #include <robocal/solver/assessment.hpp>
 
 #include <cmath>

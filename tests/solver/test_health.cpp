@@ -7,8 +7,8 @@
 #include <catch2/catch.hpp>
 
 #include <robocal/formats/health_report.hpp>
-#include <robocal/kinematics/puma560.hpp>
 #include <robocal/kinematics/units.hpp>
+#include <robocal/robot/puma560.hpp>
 #include <robocal/sim/measurements.hpp>
 #include <robocal/solver/calibrate.hpp>
 #include <robocal/solver/health.hpp>

@@ -1,6 +1,6 @@
 #include <catch2/catch.hpp>
 
-#include <robocal/kinematics/puma560.hpp>
+#include <robocal/robot/puma560.hpp>
 #include <robocal/sim/measurements.hpp>
 #include <robocal/solver/identifiability.hpp>
 #include <robocal/solver/problem.hpp>

@@ -1,7 +1,7 @@
 // The ISO-style figures' statistics: the quantiles against published tables, and the figures of
 // samples made to known values.
 #include <robocal/kinematics/kinematics.hpp>
-#include <robocal/kinematics/puma560.hpp>
+#include <robocal/robot/puma560.hpp>
 #include <robocal/solver/iso9283.hpp>
 
 #include <catch2/catch.hpp>

@@ -1,7 +1,7 @@
 #include <catch2/catch.hpp>
 
 #include <robocal/kinematics/kinematics.hpp>
-#include <robocal/kinematics/puma560.hpp>
+#include <robocal/robot/puma560.hpp>
 #include <robocal/sim/measurements.hpp>
 #include <robocal/solver/problem.hpp>
 

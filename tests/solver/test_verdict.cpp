@@ -2,7 +2,7 @@
 // cause and the fix in words, and stays quiet on an ordinary calibration.
 #include <catch2/catch.hpp>
 
-#include <robocal/kinematics/puma560.hpp>
+#include <robocal/robot/puma560.hpp>
 #include <robocal/sim/measurements.hpp>
 #include <robocal/solver/assessment.hpp>
 #include <robocal/solver/verdict.hpp>

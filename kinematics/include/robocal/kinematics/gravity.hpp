@@ -18,8 +18,4 @@ using ChainFrames = std::array<Eigen::Isometry3d, 2 * kJointCount + 1>;
 // The gravity torque each joint carries (N m) in the chain's frames (Kinematics::chainFrames).
 std::array<double, kJointCount> gravityTorqueNm(const ChainFrames& frames, const GravityLoad& load);
 
-// The PUMA 560's link masses and centres (Armstrong, Khatib and Burdick, ICRA 1986, as Corke's
-// mdl_puma560 tabulates them), with a payload of `payload_kg` at `payload_com_mm`.
-GravityLoad puma560GravityLoad(double payload_kg, const Eigen::Vector3d& payload_com_mm);
-
 }  // namespace robocal

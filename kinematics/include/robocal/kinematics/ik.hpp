@@ -1,5 +1,5 @@
 // Numerical inverse kinematics (damped least squares) for any 54-parameter model. Used by the
-// simulator; the planner adds the PUMA's closed form and refines it with this.
+// simulator; robot/ has the inverse kinematics of whole arms (arm.hpp: a closed form, or seeded).
 #pragma once
 
 #include <robocal/kinematics/kinematics.hpp>
