@@ -5,6 +5,7 @@
 
 #include "arms.hpp"
 
+#include <robocal/formats/model_json.hpp>
 #include <robocal/robot/numeric_ik.hpp>
 #include <robocal/robot/puma_ik.hpp>
 
@@ -129,11 +130,12 @@ TEST_CASE("numeric IK: every configuration of a pose, the seed's turn, unreachab
 
 TEST_CASE("numeric IK sweep: 10,000 regular poses an arm", "[.ik-sweep]") {
   const NumericIk numeric_puma(puma560NominalModel()), calibrated(calibratedLikePuma(5)),
-      ur5(ur5Model());
+      ur5(ur5Model()), rx160(loadModelFile(ROBOCAL_SOURCE_DIR "/config/rx160.json"));
   const PumaIk closed_form(calibratedLikePuma(5));
   for (const Arm* arm :
        {static_cast<const Arm*>(&numeric_puma), static_cast<const Arm*>(&calibrated),
-        static_cast<const Arm*>(&closed_form), static_cast<const Arm*>(&ur5)}) {
+        static_cast<const Arm*>(&closed_form), static_cast<const Arm*>(&ur5),
+        static_cast<const Arm*>(&rx160)}) {
     const SweepResult r = sweep(*arm, 10000, 20261206);
     std::printf("%-28s %-17s solved %d of %d, worst %.1e mm%s%s\n", arm->model().name.c_str(),
                 arm->ikName(), r.solved, r.poses, r.worst_mm, r.first_failure.empty() ? "" : "; ",
