@@ -172,10 +172,9 @@ bool Arm::wrapIntoLimits(JointsDeg& q, const JointsDeg* near) const {
 }
 
 void Arm::measureError(IkSolution& s, const Eigen::Isometry3d& target) const {
-  const Eigen::Isometry3d pose = kin_.toolPose(s.joints_deg);
-  s.position_error_mm = (pose.translation() - target.translation()).norm();
-  const Eigen::AngleAxisd rot(target.linear() * pose.linear().transpose());
-  s.angle_error_deg = std::abs(rot.angle()) * kDegPerRad;
+  const PoseError e = poseError(kin_, target, s.joints_deg, refine_options_.orientation_scale_mm);
+  s.position_error_mm = e.position_mm;
+  s.angle_error_deg = e.angle_rad * kDegPerRad;
 }
 
 double Arm::poseCost(const Eigen::Isometry3d& target, const JointsDeg& q) const {
@@ -258,7 +257,10 @@ Arm::Descent Arm::descend(const Eigen::Isometry3d& target, const ArmConfig* conf
 }
 
 std::shared_ptr<const Arm> makeArm(const Model& model) {
-  if (PumaIk::fits(model)) return std::make_shared<PumaIk>(model);
+  if (PumaIk::isPumaChain(model)) {
+    auto puma = std::make_shared<const PumaIk>(model);  // made once, judged by its own miss
+    if (puma->closedFormServes()) return puma;
+  }
   return std::make_shared<NumericIk>(model);
 }
 

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
+#include <tuple>
 
 namespace robocal {
 namespace {
@@ -47,13 +48,15 @@ std::string pumaChainProblem(const Model& model) {
 
 }  // namespace
 
-bool PumaIk::fits(const Model& model) {
-  if (!pumaChainProblem(model).empty()) return false;
+bool PumaIk::isPumaChain(const Model& model) {
+  return pumaChainProblem(model).empty();
+}
+
+bool PumaIk::closedFormServes() const {
   // The closed form must land near enough for the refinement to start from it: a chain with the
   // PUMA's joint axes but other offsets (a shoulder offset along L1.x, as the Staubli RX arms
   // have) is not one it solves.
-  const auto [miss_mm, miss_deg] = PumaIk(model).closedFormMiss();
-  return miss_mm <= kFitsPositionMm && miss_deg <= kFitsAngleDeg;
+  return miss_mm_ <= kFitsPositionMm && miss_deg_ <= kFitsAngleDeg;
 }
 
 std::pair<double, double> PumaIk::closedFormMiss() const {
@@ -82,7 +85,7 @@ PumaIk::PumaIk(const Model& model) : Arm(model) {
   d4_ = model.links[4].z_mm;
   forearm_len_ = std::hypot(a3_, d4_);
   forearm_angle_ = std::atan2(d4_, a3_);
-  exact_dh_ = closedFormMiss().first < 1e-6;
+  std::tie(miss_mm_, miss_deg_) = closedFormMiss();
 }
 
 double PumaIk::theta(int j, double reading_deg) const {
@@ -254,7 +257,7 @@ IkSolution PumaIk::solve(const Eigen::Isometry3d& tool_pose, const ArmConfig& co
     // The closed form solves the model's DH part. A calibrated model reaches a little further or
     // less far than that, and is singular a little elsewhere: near the edge of the reach or a
     // singularity the closed form can say no where the model has an answer.
-    if (exact_dh_) return cf;
+    if (miss_mm_ < 1e-6) return cf;  // the closed form solves the full model
     const IkSolution seeded = solveFromSeeds(tool_pose, config, near);
     return seeded.ok() ? seeded : cf;
   }

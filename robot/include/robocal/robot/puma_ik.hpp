@@ -20,13 +20,16 @@ namespace robocal {
 
 class PumaIk final : public Arm {
  public:
-  // True when the model is a PUMA-like chain this closed form serves (the constructor's checks).
-  static bool fits(const Model& model);
+  // True when the model's joint axes are a PUMA's (the constructor's checks).
+  static bool isPumaChain(const Model& model);
   // Throws std::invalid_argument when the model's L1..L5 are not a PUMA-like chain (link
   // rotations more than a few degrees from the PUMA's alphas).
   explicit PumaIk(const Model& model);
 
   const char* ikName() const override { return "PUMA closed form"; }
+  // True when the closed form lands within 20 mm and 2 deg of this model at three probe poses,
+  // near enough for the refinement (makeArm takes the numeric IK otherwise).
+  bool closedFormServes() const;
 
   // Closed form of the DH arm only (exact for a model made by modelFromStandardDH). `near`, when
   // given, picks among 360-degree turns of each joint the reading closest to it (else the one
@@ -69,7 +72,8 @@ class PumaIk final : public Arm {
   Eigen::Isometry3d base_inv_, tool_inv_;
   double a2_, a3_, d3_, d4_;
   double forearm_len_, forearm_angle_;  // |(a3, d4)| and atan2(d4, a3)
-  bool exact_dh_ = false;               // the closed form solves the full model
+  // closedFormMiss() of this model: how far the closed form lands from it (0: exactly its DH).
+  double miss_mm_ = 0, miss_deg_ = 0;
 };
 
 }  // namespace robocal
