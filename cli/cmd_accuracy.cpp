@@ -29,7 +29,8 @@ arm's whole range (beyond where the user works: what the calibration does not co
 
   --calibrated FILE     the calibrated model                                      required
   --nominal FILE        the controller's model: only a check, refused when it differs from
-                        the one recorded in CALIBRATED   [the recorded one, else the PUMA 560]
+                        the one recorded in CALIBRATED              [the recorded one, else
+                        the built-in model of its name; else required]
   --truth FILE          a simulation's true robot (robocal simulate --truth-out); with its
                         realism, judged warm, approaching in +, with its payload
   --cell FILE           cell file: its work_volume section
@@ -71,7 +72,8 @@ int run(const std::vector<std::string>& argv) {
     const long count = args.integer("whole-range", 200);
     if (count < 1 || count > 100000) throw UsageError("--whole-range: 1 to 100000 joint vectors");
     report = assessAccuracyAtJoints(
-        compensator, wholeRangeJoints(nominal, static_cast<std::size_t>(count)), true_robot);
+        compensator, wholeRangeJoints(compensator.nominalArm(), static_cast<std::size_t>(count)),
+        true_robot);
     report.poses_from =
         "the arm's whole range: " + std::to_string(count) + " joint vectors within its limits";
   } else if (args.has("poses")) {

@@ -40,7 +40,8 @@ unreachable; the last two carry no joints (docs/compensation.md).
   --dialect D           the program's language: as (Kawasaki AS), vplus (V+), val2 (VAL II)
   --out FILE            output to write                                                 required
   --nominal FILE        the controller's model: only a check, refused when it differs from the
-                        nominal recorded in MODEL       [the recorded one, else the PUMA 560]
+                        nominal recorded in MODEL                   [the recorded one, else
+                        the built-in model of its name; else required]
   --tool X,Y,Z,RZ,RY,RX tool centre point in the ball fixture's frame (mm, deg)       [0,...]
   --approach-deg D      reach each target from a pre-point D deg below it in every joint,
                         as the calibration reached its points (backlash then sits where the

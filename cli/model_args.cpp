@@ -2,7 +2,7 @@
 
 #include <robocal/formats/csv.hpp>
 #include <robocal/formats/model_json.hpp>
-#include <robocal/robot/puma560.hpp>
+#include <robocal/robot/builtin.hpp>
 
 #include <cmath>
 #include <cstdio>
@@ -31,17 +31,22 @@ Model nominalFor(const Args& args, const Model& calibrated, const char* command,
                  recorded->name.c_str(), model_path.c_str());
     return *recorded;
   }
-  Model builtin = puma560NominalModel();
+  // No record: the built-in model of the name it was fitted from (or its own name, when it is a
+  // nominal model itself); any other arm's nominal must be named.
+  const std::string from =
+      calibrated.provenance ? calibrated.provenance->nominal_name : calibrated.name;
+  const std::optional<Model> builtin = builtinNominalModel(from);
+  if (!builtin)
+    throw UsageError(model_path +
+                     " does not record the nominal it was calibrated from (a nominal " +
+                     "model, or one fitted before robocal recorded it), and \"" + from +
+                     "\" is not a model robocal carries (" + builtinNominalNames() +
+                     "): give --nominal FILE, the controller's model the calibration started from");
   std::fprintf(stderr,
-               "robocal %s: nominal: the built-in %s (%s does not record its nominal: a nominal "
-               "model, or one fitted before robocal recorded it; --nominal names yours)\n",
-               command, builtin.name.c_str(), model_path.c_str());
-  if (calibrated.provenance && calibrated.provenance->nominal_name != builtin.name)
-    std::fprintf(stderr,
-                 "robocal %s: warning: %s was fitted from \"%s\", not from the built-in nominal: "
-                 "give --nominal\n",
-                 command, model_path.c_str(), calibrated.provenance->nominal_name.c_str());
-  return builtin;
+               "robocal %s: nominal: the built-in \"%s\" (%s does not record its nominal: a "
+               "nominal model, or one fitted before robocal recorded it; --nominal names yours)\n",
+               command, builtin->name.c_str(), model_path.c_str());
+  return *builtin;
 }
 
 std::optional<double> approachDegArg(const Args& args) {

@@ -2,8 +2,8 @@
 // (compensate, accuracy): the nominal recorded in the calibrated model when --nominal is not
 // given; --nominal is then only a check, refused when it differs from the record, because
 // compensating against another nominal than the calibration's gives wrong joints with no sign.
-// A calibrated file older than the record falls back to --nominal, else the built-in PUMA 560,
-// with a note on stderr.
+// A calibrated file older than the record falls back to --nominal, else to the built-in model of
+// the name it was fitted from (robot/builtin.hpp), with a note on stderr; else it is refused.
 #pragma once
 
 #include "args.hpp"
@@ -15,7 +15,8 @@
 namespace robocal::cli {
 
 // `command` names the subcommand in notes ("compensate"); `model_key` is the option naming the
-// calibrated model ("model", "calibrated"). Throws UsageError on a --nominal that differs.
+// calibrated model ("model", "calibrated"). Throws UsageError on a --nominal that differs, and
+// when no nominal is found.
 Model nominalFor(const Args& args, const Model& calibrated, const char* command,
                  const char* model_key);
 

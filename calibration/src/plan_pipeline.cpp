@@ -34,11 +34,11 @@ PlannedCell planCalibration(const Model& model, const CellConfig& calibration_ce
   const bool check = request.kind == PlanKind::kCheck;
   PlannedCell out;
   DesignOptions design = request.design;
-  const std::vector<JointsDeg> whole_joints = wholeRangeJoints(model);
+  const Compensator nominal_only(model, model);
+  const std::vector<JointsDeg> whole_joints = wholeRangeJoints(nominal_only.nominalArm());
   design.whole_range_joints = whole_joints;
   out.cell = check ? healthCheckCell(calibration_cell) : calibration_cell;
-  const std::vector<JointsDeg> work_joints =
-      workVolumeJoints(out.cell.work_volume, Compensator(model, model));
+  const std::vector<JointsDeg> work_joints = workVolumeJoints(out.cell.work_volume, nominal_only);
   out.work_poses = work_joints.size();
   out.whole_poses = whole_joints.size();
   switch (request.kind) {

@@ -48,23 +48,6 @@ AccuracyReport assess(const Compensator& compensator, std::size_t count,
 
 }  // namespace
 
-std::vector<JointsDeg> wholeRangeJoints(const Model& model, std::size_t count, std::uint64_t seed) {
-  constexpr double kWristMarginDeg = 5;
-  std::mt19937_64 rng(seed);
-  std::vector<JointsDeg> out;
-  out.reserve(count);
-  // A model whose joint 5 lives within the margin of its singularity gets no vectors, not a hang.
-  for (std::size_t draw = 0; out.size() < count && draw < 100 * count; ++draw) {
-    JointsDeg q;
-    for (int j = 0; j < kJointCount; ++j)
-      q[j] = std::uniform_real_distribution<double>(model.joints[j].min_deg,
-                                                    model.joints[j].max_deg)(rng);
-    if (std::abs(std::sin(q[4] * kRadPerDeg)) < std::sin(kWristMarginDeg * kRadPerDeg)) continue;
-    out.push_back(q);
-  }
-  return out;
-}
-
 std::vector<Eigen::Isometry3d> workVolumePoses(const WorkVolume& work,
                                                const Compensator& compensator) {
   std::vector<Eigen::Isometry3d> out;

@@ -238,7 +238,7 @@ AccuracyReport predictedWorkVolumeAccuracy(const Compensator& compensator, const
 }
 
 AccuracyReport predictedWholeRangeAccuracy(const Compensator& compensator) {
-  const std::vector<JointsDeg> joints = wholeRangeJoints(compensator.calibrated());
+  const std::vector<JointsDeg> joints = wholeRangeJoints(compensator.calibratedArm());
   AccuracyReport report = assessAccuracyAtJoints(compensator, joints);
   report.poses_from = "the arm's whole range: " + std::to_string(joints.size()) +
                       " joint vectors within its limits";

@@ -46,7 +46,7 @@ nlohmann::json compensateRequest(const ModelStore& models, const Model& nominal,
       out.targets.push_back(std::move(row));
     }
     return proto::toJson(out);
-  } catch (const std::exception& e) {  // a model that is not PUMA-like
+  } catch (const std::exception& e) {  // a model no arm serves (makeArm)
     return proto::errorObject(std::string("cannot compensate with model version ") +
                                   std::to_string(active->version) + ": " + e.what(),
                               "compensate");

@@ -7,6 +7,7 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
+#include <random>
 #include <stdexcept>
 
 namespace robocal {
@@ -254,6 +255,23 @@ Arm::Descent Arm::descend(const Eigen::Isometry3d& target, const ArmConfig* conf
   }
   d.converged = err.position_mm < opt.position_tol_mm && err.angle_rad < opt.angle_tol_rad;
   return d;
+}
+
+std::vector<JointsDeg> wholeRangeJoints(const Arm& arm, std::size_t count, std::uint64_t seed,
+                                        double min_wrist_deg) {
+  const Model& model = arm.model();
+  std::mt19937_64 rng(seed);
+  std::vector<JointsDeg> out;
+  out.reserve(count);
+  for (std::size_t draw = 0; out.size() < count && draw < 100 * count; ++draw) {
+    JointsDeg q;
+    for (int j = 0; j < kJointCount; ++j)
+      q[j] = std::uniform_real_distribution<double>(model.joints[j].min_deg,
+                                                    model.joints[j].max_deg)(rng);
+    if (arm.singularityMargins(q).wrist_deg < min_wrist_deg) continue;
+    out.push_back(q);
+  }
+  return out;
 }
 
 std::shared_ptr<const Arm> makeArm(const Model& model) {

@@ -59,6 +59,30 @@ TEST_CASE("[cli] robocal compensate returns a program's own joints when nothing 
   }
 }
 
+TEST_CASE("[cli] a model without a recorded nominal: the built-in of its name, else --nominal") {
+  TempDir dir;
+  writeFile(dir / "program.csv", "name,j1,j2,j3,j4,j5,j6\nb,-45,60,-140,20,45,30\n");
+  const std::string targets = " --targets " + dir / "program.csv";
+  // The PUMA's nominal file is a model robocal carries: found by its name.
+  RunResult r = runRobocal("compensate --model " + kModel + targets + " --out " + dir / "puma.csv");
+  INFO(r.output);
+  CHECK(r.exit_code == 0);
+  CHECK_THAT(r.output, Contains("nominal: the built-in \"PUMA 560"));
+  // Another arm's nominal is not compensated against the PUMA's: refused until named.
+  const std::string rx160 = ROBOCAL_SOURCE_DIR "/config/rx160.json";
+  r = runRobocal("compensate --model " + rx160 + targets + " --out " + dir / "never.csv");
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.output, Contains("does not record the nominal") && Contains("give --nominal"));
+  CHECK_FALSE(std::ifstream(dir / "never.csv").good());
+  r = runRobocal("accuracy --calibrated " + rx160);
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.output, Contains("Staubli RX160") && Contains("give --nominal"));
+  r = runRobocal("compensate --model " + rx160 + " --nominal " + rx160 + targets + " --out " +
+                 dir / "rx160.csv");
+  CHECK(r.exit_code == 0);
+  CHECK(std::ifstream(dir / "rx160.csv").good());
+}
+
 TEST_CASE("[cli] robocal compensate and accuracy on a simulated calibration") {
   TempDir dir;
   REQUIRE(runRobocal("simulate --model " + kModel + " --seed 3 --points-per-shell 40 --out " +

@@ -160,9 +160,10 @@ TEST_CASE("over the work volume, compensation makes a simulated robot at least 1
 
 TEST_CASE("beyond the work volume: the arm's whole range, predicted and true, side by side") {
   const Model nominal = puma560NominalModel();
-  const auto joints = wholeRangeJoints(nominal, 300, 5);
+  const auto arm = makeArm(nominal);
+  const auto joints = wholeRangeJoints(*arm, 300, 5);
   REQUIRE(joints.size() == 300);
-  CHECK(joints == wholeRangeJoints(nominal, 300, 5));  // a seed draws the same vectors
+  CHECK(joints == wholeRangeJoints(*arm, 300, 5));  // a seed draws the same vectors
   double lowest_j1 = 1e9, highest_j1 = -1e9;
   for (const JointsDeg& q : joints) {
     for (int j = 0; j < kJointCount; ++j) {
@@ -187,12 +188,13 @@ TEST_CASE("beyond the work volume: the arm's whole range, predicted and true, si
   CHECK_THAT(predicted.text, Contains("the arm's whole range: 200 joint vectors"));
   const TrueRobot true_robot{truth, Realism::ideal()};
   const AccuracyReport at_joints =
-      assessAccuracyAtJoints(comp, wholeRangeJoints(nominal, 60, 2), &true_robot);
+      assessAccuracyAtJoints(comp, wholeRangeJoints(comp.nominalArm(), 60, 2), &true_robot);
   CHECK(at_joints.solved > 40);
   CHECK(at_joints.compensated_position_mm.rms < at_joints.nominal_position_mm.rms);
   // Each target is where the nominal model puts the drawn joints.
-  const PoseDifference d = poseDifference(
-      at_joints.poses[0].target.target, comp.nominalToolPose(wholeRangeJoints(nominal, 60, 2)[0]));
+  const PoseDifference d =
+      poseDifference(at_joints.poses[0].target.target,
+                     comp.nominalToolPose(wholeRangeJoints(comp.nominalArm(), 60, 2)[0]));
   CHECK(d.position_mm < 1e-9);
 }
 
@@ -203,7 +205,7 @@ TEST_CASE("accuracy reaches each target in the configuration its file asks for")
   // Poses of joint vectors of both shoulders; each judged in the configuration it was drawn in.
   std::vector<Eigen::Isometry3d> poses;
   std::vector<std::optional<ArmConfig>> configs;
-  for (const JointsDeg& q : wholeRangeJoints(nominal, 40, 3)) {
+  for (const JointsDeg& q : wholeRangeJoints(comp.nominalArm(), 40, 3)) {
     poses.push_back(comp.nominalToolPose(q));
     configs.push_back(ik.configOf(q));
   }

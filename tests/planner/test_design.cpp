@@ -111,7 +111,7 @@ TEST_CASE("a robust optimal plan trades a little of the work volume for the whol
   const CellConfig cell = smallCell();
   DesignOptions options = smallOptions();
   options.points = 60;
-  const std::vector<JointsDeg> whole = wholeRangeJoints(nominal(), 100);
+  const std::vector<JointsDeg> whole = wholeRangeJoints(*makeArm(nominal()), 100);
   const Plan knife_edge = planOptimal(nominal(), cell, workJoints(), options);
   options.whole_range_joints = whole;
   options.whole_range_weight = 0.1;

@@ -9,6 +9,7 @@
 #include <robocal/robot/numeric_ik.hpp>
 #include <robocal/robot/puma_ik.hpp>
 
+#include <cmath>
 #include <cstdio>
 
 using namespace robocal;
@@ -160,4 +161,27 @@ TEST_CASE("the PUMA's closed form on a calibrated model solves poses at the edge
     CHECK(s.ok());
     CHECK(s.position_error_mm < 1e-6);
   }
+}
+
+TEST_CASE("the whole range is drawn within the limits and away from the arm's own wrist") {
+  // A UR5 whose joint 5 reads 0 where its angle is 90 deg: the wrist is singular at readings near
+  // -90 and 90, not near 0, and the draws must say so from the arm's geometry, not the reading.
+  Model model = ur5Model();
+  model.joints[4].offset_deg = 90;
+  const auto arm = makeArm(model);
+  const std::vector<JointsDeg> joints = wholeRangeJoints(*arm, 500, 7);
+  REQUIRE(joints.size() == 500);
+  CHECK(joints == wholeRangeJoints(*arm, 500, 7));  // a seed draws the same vectors
+  CHECK(joints != wholeRangeJoints(*arm, 500, 8));
+  int near_zero_reading = 0;
+  for (const JointsDeg& q : joints) {
+    for (int j = 0; j < kJointCount; ++j) {
+      CHECK(q[j] >= model.joints[j].min_deg);
+      CHECK(q[j] <= model.joints[j].max_deg);
+    }
+    CHECK(arm->singularityMargins(q).wrist_deg >= 5);
+    CHECK(std::abs(std::remainder(q[4] - 90, 180.0)) >= 5 - 1e-9);
+    if (std::abs(std::remainder(q[4], 180.0)) < 5) ++near_zero_reading;
+  }
+  CHECK(near_zero_reading > 0);  // regular on this arm, so drawn
 }

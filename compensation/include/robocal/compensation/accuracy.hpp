@@ -26,13 +26,6 @@ std::vector<Eigen::Isometry3d> workVolumePoses(const WorkVolume& work,
 // an off-line program or the plan's work-volume objective has them).
 std::vector<JointsDeg> workVolumeJoints(const WorkVolume& work, const Compensator& compensator);
 
-// The arm's whole range, beside the declared work volume: `count` joint vectors drawn uniformly
-// within the model's joint limits with `seed`, joint 5 at least 5 deg from its singularity. What
-// a calibration measured on a few shells says little about most of them: a prediction over these
-// shows what it does not cover (docs/accuracy.md).
-std::vector<JointsDeg> wholeRangeJoints(const Model& model, std::size_t count = 200,
-                                        std::uint64_t seed = 1);
-
 struct ErrorStats {
   size_t count = 0;
   double rms = 0;

@@ -106,6 +106,8 @@ class Compensator {
 
   const Model& nominal() const { return nominal_->model(); }
   const Model& calibrated() const { return calibrated_->model(); }
+  const Arm& nominalArm() const { return *nominal_; }
+  const Arm& calibratedArm() const { return *calibrated_; }
   const CompensationOptions& options() const { return options_; }
   // The pre-point step in effect (options, else the calibrated model's), deg; 0: none.
   double approachDeg() const { return approach_deg_; }

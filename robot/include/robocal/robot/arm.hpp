@@ -13,6 +13,7 @@
 #include <robocal/kinematics/kinematics.hpp>
 
 #include <array>
+#include <cstdint>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -171,6 +172,15 @@ class Arm {
   mutable std::once_flag seeds_built_;
   mutable std::array<std::vector<Seed>, kArmConfigCount> seeds_;  // by armConfigIndex
 };
+
+// The arm's whole range, beside a cell's declared work volume: `count` joint vectors drawn
+// uniformly within the model's joint limits with `seed`, each at least `min_wrist_deg` from the
+// wrist singularity (Arm::singularityMargins), where no compensation or fit says anything. What a
+// calibration measured on a few shells says little about most of them: a prediction over these
+// shows what it does not cover (docs/accuracy.md). A model whose wrist lives within the margin
+// gets fewer vectors (at most 100 draws a vector), not a hang.
+std::vector<JointsDeg> wholeRangeJoints(const Arm& arm, std::size_t count = 200,
+                                        std::uint64_t seed = 1, double min_wrist_deg = 5);
 
 // The arm for a model: the PUMA's closed form when the model is a PUMA-like chain, else the
 // numeric inverse kinematics. Throws std::invalid_argument for a model neither serves (a zero
