@@ -211,7 +211,9 @@ int run(const std::vector<std::string>& argv) {
                 design_report.candidates, design_report.rounds,
                 design_report.rounds == 1 ? "" : "s",
                 design.budget_s > 0 && sum.cell_time_s > design.budget_s
-                    ? "; OVER THE BUDGET (the fewest points that reach rank 36 take longer)"
+                    ? ("; OVER THE BUDGET (the fewest points that reach rank " +
+                       std::to_string(sum.expected_rank) + " take longer)")
+                          .c_str()
                     : "");
   std::printf("planned in %.2f s; wrote %s\n", plan_s, out.c_str());
   return 0;

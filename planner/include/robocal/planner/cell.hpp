@@ -39,9 +39,9 @@ struct ToolOrientationPolicy {
 
 struct SafetyMargins {
   double joint_limit_deg = 5;            // kept inside every joint limit
-  double wrist_singularity_deg = 10;     // |theta5| from 0 (and 180)
+  double wrist_singularity_deg = 10;     // axes of joints 4 and 6 from aligned (Arm's margins)
   double elbow_singularity_deg = 10;     // elbow bend from the straight arm
-  double shoulder_singularity_mm = 100;  // wrist centre from joint 1's axis plane
+  double shoulder_singularity_mm = 100;  // wrist point from the plane of joints 1 and 2's axes
   double table_clearance_mm = 30;        // flange and wrist centre above the chucks' plane z = 0
   double bar_clearance_mm = 40;          // flange and wrist centre from the bar (chuck to ball)
 };
