@@ -10,6 +10,7 @@
 # ROBOCAL_WHOLE_RANGE=N judges N joint vectors over the arm's whole range instead of the work
 # volume (robocal accuracy --whole-range).
 # ROBOCAL_SOLVE_ARGS: more options for robocal solve (e.g. --compliance).
+# ROBOCAL_PLAN_ARGS: more options for robocal plan (e.g. --time-budget-min 90).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${ROBOCAL_BUILD_DIR:-$root/build}
@@ -18,7 +19,9 @@ seeds=${1:-10}
 model=$root/config/puma560.json
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-"$bin" plan --model "$model" --cell "${ROBOCAL_CELL:-$root/config/cell.json}" --out "$work/plan.json" >/dev/null
+# shellcheck disable=SC2086  # the options are words
+"$bin" plan --model "$model" --cell "${ROBOCAL_CELL:-$root/config/cell.json}" ${ROBOCAL_PLAN_ARGS:-} \
+  --out "$work/plan.json" >/dev/null
 echo "| seed | samples | fit RMS (mm) | nominal joints RMS / p95 (mm) | compensated RMS / p95 / max (mm) | ratio | model's own RMS (mm) | predicted RMS (mm) | orientation nominal / compensated RMS (deg) |"
 echo "|---|---|---|---|---|---|---|---|---|"
 for seed in $(seq 1 "$seeds"); do

@@ -81,6 +81,14 @@ class Reader {
     return obj.contains(key) ? number(obj, where, key) : 0.0;
   }
 
+  // A field of the parameter layout (kLinkFields, kJointFields): required, or the value its
+  // `absent` says an older file stands for.
+  template <typename Params>
+  double parameter(const json& obj, const std::string& where, const ParamField<Params>& f) const {
+    if (!obj.contains(f.key) && !std::isnan(f.absent)) return f.absent;
+    return number(obj, where, f.key);
+  }
+
  private:
   jsonread::Reader<FormatError> r_;
 };
@@ -297,12 +305,7 @@ Model modelFromJson(const json& root, const std::string& source) {
     const json& l = r.object(links[k], where);
     LinkParams& link = m.links[k];
     link.name = r.optionalString(l, where, "name", "L" + std::to_string(k));
-    link.x_mm = r.number(l, where, "x");
-    link.y_mm = r.number(l, where, "y");
-    link.z_mm = r.number(l, where, "z");
-    link.rz_deg = r.number(l, where, "rz");
-    link.ry_deg = r.number(l, where, "ry");
-    link.rx_deg = r.number(l, where, "rx");
+    for (const auto& f : kLinkFields) link.*f.field = r.parameter(l, where, f);
   }
 
   const json& joints = r.array(root, "joints", kJointCount);
@@ -311,8 +314,7 @@ Model modelFromJson(const json& root, const std::string& source) {
     const json& jo = r.object(joints[j], where);
     JointParams& joint = m.joints[j];
     joint.name = r.optionalString(jo, where, "name", "J" + std::to_string(j + 1));
-    joint.offset_deg = r.number(jo, where, "offset");
-    joint.gain = r.number(jo, where, "gain");
+    for (const auto& f : kJointFields) joint.*f.field = r.parameter(jo, where, f);
     joint.min_deg = r.number(jo, where, "min");
     joint.max_deg = r.number(jo, where, "max");
     if (joint.gain == 0.0) r.fail(where + ".gain", "must not be zero");
@@ -359,22 +361,18 @@ nlohmann::ordered_json modelToJson(const Model& m) {
   out["name"] = m.name;
   if (m.provenance) out["provenance"] = provenanceToJson(*m.provenance);
   ojson links = ojson::array();
-  for (const LinkParams& l : m.links)
-    links.push_back(ojson{{"name", l.name},
-                          {"x", l.x_mm},
-                          {"y", l.y_mm},
-                          {"z", l.z_mm},
-                          {"rz", l.rz_deg},
-                          {"ry", l.ry_deg},
-                          {"rx", l.rx_deg}});
+  for (const LinkParams& l : m.links) {
+    ojson link{{"name", l.name}};
+    for (const auto& f : kLinkFields) link[f.key] = l.*f.field;
+    links.push_back(link);
+  }
   out["links"] = links;
   ojson joints = ojson::array();
   for (const JointParams& j : m.joints) {
-    ojson joint{{"name", j.name},
-                {"offset", j.offset_deg},
-                {"gain", j.gain},
-                {"min", j.min_deg},
-                {"max", j.max_deg}};
+    ojson joint{{"name", j.name}};
+    for (const auto& f : kJointFields) joint[f.key] = j.*f.field;
+    joint["min"] = j.min_deg;
+    joint["max"] = j.max_deg;
     if (j.velocity_deg_per_s > 0) joint["velocity_deg_per_s"] = j.velocity_deg_per_s;
     if (j.effort_nm > 0) joint["effort_nm"] = j.effort_nm;
     joints.push_back(joint);

@@ -8,30 +8,37 @@
 namespace robocal {
 namespace {
 
-constexpr std::array<const char*, kLinkParamCount> kLinkKeys = {"x", "y", "z", "rz", "ry", "rx"};
-constexpr std::array<const char*, kJointParamCount> kJointKeys = {"offset", "gain"};
-constexpr int kBlock = kLinkParamCount + kJointParamCount;
+// A parameter's value in the Model (mm, deg, unitless) and in ParamVector (mm, rad, unitless).
+double toInternal(ParamKind kind, double value) {
+  return kind == ParamKind::kAngle ? value * kRadPerDeg : value;
+}
+double toInterface(ParamKind kind, double value) {
+  return kind == ParamKind::kAngle ? value * kDegPerRad : value;
+}
+// The Model field parameter `index` holds.
+double& modelField(Model& m, int index) {
+  const ParamSlot s = paramSlot(index);
+  return s.joint ? m.joints[s.element].*kJointFields[s.field].field
+                 : m.links[s.element].*kLinkFields[s.field].field;
+}
+double modelField(const Model& m, int index) {
+  const ParamSlot s = paramSlot(index);
+  return s.joint ? m.joints[s.element].*kJointFields[s.field].field
+                 : m.links[s.element].*kLinkFields[s.field].field;
+}
 
 }  // namespace
-
-ParamKind paramKind(int index) {
-  const int within = index % kBlock;
-  if (within < 3) return ParamKind::kTranslation;
-  if (within < kLinkParamCount) return ParamKind::kAngle;
-  return within == kLinkParamCount ? ParamKind::kAngle : ParamKind::kGain;
-}
 
 ParamVector paramSigmas(double translation_mm, double link_angle_deg, double joint_offset_deg,
                         double gain) {
   ParamVector sigma;
   for (int i = 0; i < kParamCount; ++i) {
-    const bool joint = (i % kBlock) >= kLinkParamCount;
     switch (paramKind(i)) {
       case ParamKind::kTranslation:
         sigma[i] = translation_mm;
         break;
       case ParamKind::kAngle:
-        sigma[i] = (joint ? joint_offset_deg : link_angle_deg) * kRadPerDeg;
+        sigma[i] = (paramSlot(i).joint ? joint_offset_deg : link_angle_deg) * kRadPerDeg;
         break;
       case ParamKind::kGain:
         sigma[i] = gain;
@@ -42,10 +49,9 @@ ParamVector paramSigmas(double translation_mm, double link_angle_deg, double joi
 }
 
 std::string paramName(int index) {
-  const int block = index / kBlock;
-  const int within = index % kBlock;
-  if (within < kLinkParamCount) return "L" + std::to_string(block) + "." + kLinkKeys[within];
-  return "J" + std::to_string(block + 1) + "." + kJointKeys[within - kLinkParamCount];
+  const ParamSlot s = paramSlot(index);
+  if (!s.joint) return "L" + std::to_string(s.element) + "." + kLinkFields[s.field].key;
+  return "J" + std::to_string(s.element + 1) + "." + kJointFields[s.field].key;
 }
 
 const char* paramUnit(int index) {
@@ -61,7 +67,7 @@ const char* paramUnit(int index) {
 }
 
 double paramInterfaceValue(const ParamVector& params, int index) {
-  return paramKind(index) == ParamKind::kAngle ? params[index] * kDegPerRad : params[index];
+  return toInterface(paramKind(index), params[index]);
 }
 
 int paramIndexByName(const std::string& name) {
@@ -72,17 +78,7 @@ int paramIndexByName(const std::string& name) {
 
 ParamVector toParams(const Model& model) {
   ParamVector p;
-  for (int k = 0; k < kLinkCount; ++k) {
-    const LinkParams& l = model.links[k];
-    const int i = linkParamIndex(k);
-    p.segment<6>(i) << l.x_mm, l.y_mm, l.z_mm, l.rz_deg * kRadPerDeg, l.ry_deg * kRadPerDeg,
-        l.rx_deg * kRadPerDeg;
-  }
-  for (int j = 0; j < kJointCount; ++j) {
-    const int i = jointParamIndex(j);
-    p[i] = model.joints[j].offset_deg * kRadPerDeg;
-    p[i + 1] = model.joints[j].gain;
-  }
+  for (int i = 0; i < kParamCount; ++i) p[i] = toInternal(paramKind(i), modelField(model, i));
   return p;
 }
 
@@ -115,21 +111,7 @@ std::optional<std::string> parameterDifference(const Model& here, const Model& t
 Model withParams(const Model& base, const ParamVector& p) {
   Model m = base;
   m.covariance.reset();
-  for (int k = 0; k < kLinkCount; ++k) {
-    LinkParams& l = m.links[k];
-    const int i = linkParamIndex(k);
-    l.x_mm = p[i];
-    l.y_mm = p[i + 1];
-    l.z_mm = p[i + 2];
-    l.rz_deg = p[i + 3] * kDegPerRad;
-    l.ry_deg = p[i + 4] * kDegPerRad;
-    l.rx_deg = p[i + 5] * kDegPerRad;
-  }
-  for (int j = 0; j < kJointCount; ++j) {
-    const int i = jointParamIndex(j);
-    m.joints[j].offset_deg = p[i] * kDegPerRad;
-    m.joints[j].gain = p[i + 1];
-  }
+  for (int i = 0; i < kParamCount; ++i) modelField(m, i) = toInterface(paramKind(i), p[i]);
   return m;
 }
 

@@ -97,6 +97,23 @@ TEST_CASE("parameter vector layout, names and units") {
   CHECK(paramIndexByName("nope") == -1);
   CHECK(p[linkParamIndex(0)] == Approx(m.links[0].x_mm));
   CHECK(toParams(withParams(m, p)).isApprox(p));
+  // The layout's table puts each parameter in the Model field its name says, in its units.
+  const auto changed = [&](const char* name, double step) {
+    ParamVector q = p;
+    q[paramIndexByName(name)] += step;
+    return withParams(m, q);
+  };
+  CHECK(changed("L3.ry", 0.01).links[3].ry_deg == Approx(m.links[3].ry_deg + 0.01 * 180 / M_PI));
+  CHECK(changed("L6.z", 0.5).links[6].z_mm == Approx(m.links[6].z_mm + 0.5));
+  CHECK(changed("J2.gain", 1e-3).joints[1].gain == Approx(m.joints[1].gain + 1e-3));
+  CHECK(changed("J4.offset", 0.01).joints[3].offset_deg ==
+        Approx(m.joints[3].offset_deg + 0.01 * 180 / M_PI));
+  CHECK(changed("J4.offset", 0.01).joints[2].offset_deg == m.joints[2].offset_deg);
+  for (int i = 0; i < kParamCount; ++i) {
+    const ParamSlot slot = paramSlot(i);
+    CHECK(paramIndex(slot.joint, slot.element,
+                     slot.joint ? kJointFields[slot.field].key : kLinkFields[slot.field].key) == i);
+  }
 }
 
 TEST_CASE("analytic Jacobians match central differences at random poses") {

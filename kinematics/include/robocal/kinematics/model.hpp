@@ -15,8 +15,10 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <cstddef>
+#include <limits>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace robocal {
@@ -25,10 +27,6 @@ inline constexpr int kLinkCount = 7;
 inline constexpr int kJointCount = 6;
 inline constexpr int kBallCount = 3;
 inline constexpr int kChuckCount = 3;
-inline constexpr int kLinkParamCount = 6;
-inline constexpr int kJointParamCount = 2;
-inline constexpr int kParamCount = kLinkCount * kLinkParamCount + kJointCount * kJointParamCount;
-static_assert(kParamCount == 54);
 
 struct LinkParams {
   std::string name;
@@ -50,6 +48,40 @@ struct JointParams {
 // The largest rated speed and torque a model file holds (a bound against nonsense, not a robot's).
 inline constexpr double kMaxVelocityDegPerS = 1e5;
 inline constexpr double kMaxEffortNm = 1e6;
+
+// The parameter layout, as data. Every link holds the parameters of kLinkFields and every joint
+// those of kJointFields, each naming its Model field, its key in model files and in parameter
+// names ("L3.ry", "J2.offset"), and its kind. ParamVector holds them in chain order,
+// L0(x,y,z,rz,ry,rx) J1(offset,gain) L1(...) ... J6 L6, translations in mm, angles in radians
+// (the Model's fields in deg), gains unitless. toParams, withParams, the model file, the names,
+// units and sigmas all read these tables: a new term is an entry here (with the value older
+// files stand for, `absent`) plus its Jacobian columns (Kinematics::ballJacobian,
+// Problem::residualsAndJacobian) and, if it changes the joint angle, jointAngleRad below.
+enum class ParamKind { kTranslation, kAngle, kGain };
+template <typename Params>
+struct ParamField {
+  const char* key;
+  ParamKind kind;
+  double Params::*field;
+  double absent;  // the value of a file that does not have the key; NaN: the key is required
+};
+inline constexpr double kRequired = std::numeric_limits<double>::quiet_NaN();
+inline constexpr std::array<ParamField<LinkParams>, 6> kLinkFields = {{
+    {"x", ParamKind::kTranslation, &LinkParams::x_mm, kRequired},
+    {"y", ParamKind::kTranslation, &LinkParams::y_mm, kRequired},
+    {"z", ParamKind::kTranslation, &LinkParams::z_mm, kRequired},
+    {"rz", ParamKind::kAngle, &LinkParams::rz_deg, kRequired},
+    {"ry", ParamKind::kAngle, &LinkParams::ry_deg, kRequired},
+    {"rx", ParamKind::kAngle, &LinkParams::rx_deg, kRequired},
+}};
+inline constexpr std::array<ParamField<JointParams>, 2> kJointFields = {{
+    {"offset", ParamKind::kAngle, &JointParams::offset_deg, kRequired},
+    {"gain", ParamKind::kGain, &JointParams::gain, kRequired},
+}};
+inline constexpr int kLinkParamCount = static_cast<int>(kLinkFields.size());
+inline constexpr int kJointParamCount = static_cast<int>(kJointFields.size());
+inline constexpr int kParamCount = kLinkCount * kLinkParamCount + kJointCount * kJointParamCount;
+static_assert(kParamCount == 54);
 
 // Gravity compliance (gravity.hpp has the torque): what gravity pulls on, the bodies moved by
 // joints 1..6 and the payload at the tool.
@@ -137,16 +169,48 @@ struct Model {
 using ParamVector = Eigen::Matrix<double, kParamCount, 1>;
 using JointsDeg = Eigen::Matrix<double, kJointCount, 1>;  // controller readings, degrees
 
-// Layout of ParamVector, in chain order: L0(x,y,z,rz,ry,rx) J1(offset,gain) L1(...) ... J6 L6.
-// Translations in mm, angles in radians, gains unitless.
-enum class ParamKind { kTranslation, kAngle, kGain };
+// Where the layout puts things in ParamVector: the first parameter of link 0..6 and of joint
+// 0..5 (its kLinkFields or kJointFields follow in order), and the one an entry describes.
 constexpr int linkParamIndex(int link) {
   return link * (kLinkParamCount + kJointParamCount);
 }
 constexpr int jointParamIndex(int joint /*0-based*/) {
   return linkParamIndex(joint) + kLinkParamCount;
 }
-ParamKind paramKind(int index);
+struct ParamSlot {
+  bool joint;   // a joint's parameter (kJointFields), else a link's (kLinkFields)
+  int element;  // link 0..6 or joint 0..5
+  int field;    // index into kLinkFields or kJointFields
+};
+constexpr ParamSlot paramSlot(int index) {
+  constexpr int block = kLinkParamCount + kJointParamCount;
+  const int within = index % block;
+  if (within < kLinkParamCount) return {false, index / block, within};
+  return {true, index / block, within - kLinkParamCount};
+}
+// The parameter of that link's (or joint's) field named `key`; -1 when none has it.
+constexpr int paramIndex(bool joint, int element, std::string_view key) {
+  if (joint) {
+    for (int f = 0; f < kJointParamCount; ++f)
+      if (key == kJointFields[f].key) return jointParamIndex(element) + f;
+  } else {
+    for (int f = 0; f < kLinkParamCount; ++f)
+      if (key == kLinkFields[f].key) return linkParamIndex(element) + f;
+  }
+  return -1;
+}
+constexpr ParamKind paramKind(int index) {
+  const ParamSlot s = paramSlot(index);
+  return s.joint ? kJointFields[s.field].kind : kLinkFields[s.field].kind;
+}
+// The order the link transform (Trans(x, y, z) Rz Ry Rx), the joint angle and their Jacobian
+// columns are written for, in Kinematics and in the solver's BarLengthModel: a field added to the
+// layout needs its columns there, and this check tells which code to look at.
+static_assert(paramIndex(false, 0, "x") == 0 && paramIndex(false, 0, "z") == 2 &&
+              paramIndex(false, 0, "rz") == 3 && paramIndex(false, 0, "ry") == 4 &&
+              paramIndex(false, 0, "rx") == 5 && kLinkParamCount == 6);
+static_assert(paramIndex(true, 0, "offset") == jointParamIndex(0) &&
+              paramIndex(true, 0, "gain") == jointParamIndex(0) + 1 && kJointParamCount == 2);
 
 // The joint model, in one place: a joint turns to offset + gain * reading, the angle in radians
 // for the controller's reading in degrees (offset in radians, gain unitless, as in ParamVector).
