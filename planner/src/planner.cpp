@@ -454,6 +454,14 @@ std::vector<JointsDeg> approachStages(const Kinematics& kin, const Eigen::Vector
   return stages;
 }
 
+bool ShellPlanner::approachReachable(const Connection& c, double radius, const JointsDeg& q) const {
+  const double step_deg = cell_.motion.approach_deg;
+  if (step_deg <= 0) return true;
+  const JointsDeg pre_q = approachPrePoint(arm_->kinematics(), model().balls_mm[c.ball_index],
+                                           model().chucks_mm[c.chuck_index], q, step_deg);
+  return poseProblem(c, radius, pre_q, cell_.motion.via_tolerance_mm).empty();
+}
+
 bool ShellPlanner::planApproach(const Connection& c, double radius, const ArmConfig& config,
                                 const Node& a, const Node& b, std::vector<PlanStep>& vias,
                                 double& worst, std::string& why) const {
@@ -597,7 +605,7 @@ ShellCandidates ShellPlanner::candidatePoints(const Connection& c, double extens
       int found = 0;
       for (size_t o = 0; o < offsets.size() && found < orientations; ++o) {
         const PointTry t = tryPoint(c, radius, lats[i], lons[k], offsets[o], out.config);
-        if (!t.problem.empty()) continue;
+        if (!t.problem.empty() || !approachReachable(c, radius, t.point.joints_deg)) continue;
         out.points.push_back(t.point);
         ++found;
       }
