@@ -454,22 +454,19 @@ std::vector<JointsDeg> approachStages(const Kinematics& kin, const Eigen::Vector
   return stages;
 }
 
-bool ShellPlanner::approachReachable(const Connection& c, double radius, const JointsDeg& q) const {
-  const double step_deg = cell_.motion.approach_deg;
-  if (step_deg <= 0) return true;
-  const JointsDeg pre_q = approachPrePoint(arm_->kinematics(), model().balls_mm[c.ball_index],
-                                           model().chucks_mm[c.chuck_index], q, step_deg);
-  return poseProblem(c, radius, pre_q, cell_.motion.via_tolerance_mm).empty();
+std::string ShellPlanner::approachProblem(const Connection& c, double radius, const JointsDeg& q,
+                                          JointsDeg& pre_q) const {
+  pre_q = approachPrePoint(arm_->kinematics(), model().balls_mm[c.ball_index],
+                           model().chucks_mm[c.chuck_index], q, cell_.motion.approach_deg);
+  return poseProblem(c, radius, pre_q, cell_.motion.via_tolerance_mm);
 }
 
 bool ShellPlanner::planApproach(const Connection& c, double radius, const ArmConfig& config,
                                 const Node& a, const Node& b, std::vector<PlanStep>& vias,
                                 double& worst, std::string& why) const {
-  const double step_deg = cell_.motion.approach_deg;
-  if (step_deg <= 0) return planArc(c, radius, config, a, b, 0, vias, worst, why);
-  const JointsDeg pre_q = approachPrePoint(arm_->kinematics(), model().balls_mm[c.ball_index],
-                                           model().chucks_mm[c.chuck_index], b.q, step_deg);
-  const std::string problem = poseProblem(c, radius, pre_q, cell_.motion.via_tolerance_mm);
+  if (cell_.motion.approach_deg <= 0) return planArc(c, radius, config, a, b, 0, vias, worst, why);
+  JointsDeg pre_q;
+  const std::string problem = approachProblem(c, radius, b.q, pre_q);
   if (!problem.empty()) {
     why = "its approach pre-point: " + problem;
     return false;
@@ -605,7 +602,11 @@ ShellCandidates ShellPlanner::candidatePoints(const Connection& c, double extens
       int found = 0;
       for (size_t o = 0; o < offsets.size() && found < orientations; ++o) {
         const PointTry t = tryPoint(c, radius, lats[i], lons[k], offsets[o], out.config);
-        if (!t.problem.empty() || !approachReachable(c, radius, t.point.joints_deg)) continue;
+        if (!t.problem.empty()) continue;
+        JointsDeg pre_q;  // an optimal plan's candidate needs a safe pre-point, or it is dropped
+        if (cell_.motion.approach_deg > 0 &&
+            !approachProblem(c, radius, t.point.joints_deg, pre_q).empty())
+          continue;
         out.points.push_back(t.point);
         ++found;
       }

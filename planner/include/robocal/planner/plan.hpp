@@ -251,9 +251,10 @@ class ShellPlanner {
   bool planApproach(const Connection& c, double radius, const ArmConfig& config, const Node& a,
                     const Node& b, std::vector<PlanStep>& vias, double& worst,
                     std::string& why) const;
-  // Whether the point at `q` has a safe approach pre-point (true without pre-points): an
-  // optimal plan's candidates need one, or the point is dropped when the plan is joined.
-  bool approachReachable(const Connection& c, double radius, const JointsDeg& q) const;
+  // What is wrong with the approach pre-point of the point at `q` (set in `pre_q`), "" when it
+  // is safe: planApproach and an optimal plan's candidates judge it the same way.
+  std::string approachProblem(const Connection& c, double radius, const JointsDeg& q,
+                              JointsDeg& pre_q) const;
   void finishShell(ShellPlan& shell) const;
   // The planned time of `step` reached from `from`: its move, and the settle at a point.
   double stepDuration(const JointsDeg& from, const PlanStep& step) const;
