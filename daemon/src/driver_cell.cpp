@@ -84,6 +84,8 @@ class DriverCell final : public CellIo {
 
   bool poll(Clock::time_point until) override {
     io_.restart();
+    io_.poll();  // run_until does nothing once `until` has passed, not even what is ready
+    io_.restart();
     io_.run_until(until);
     return !io_.stopped();  // stopped: no port open, nothing to wait for
   }

@@ -304,6 +304,9 @@ RunContext::Measurement RunContext::measureHere(double window_s) {
     ~Collecting() { flag = false; }
   };
   Measurement m;
+  // Readings still queued from before the dwell ended (the run thread was late, e.g. on a loaded
+  // machine) may be of the arm in motion: delivered now, they stay out of the window.
+  io.poll(Clock::now());
   window_.clear();
   const Collecting collect(collecting_);
   m.bar_window_start = Clock::now();

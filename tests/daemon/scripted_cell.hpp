@@ -10,6 +10,7 @@
 #include <robocal/kinematics/kinematics.hpp>
 
 #include <mutex>
+#include <optional>
 #include <thread>
 
 namespace robocal::test {
@@ -61,6 +62,13 @@ class ScriptedCell final : public daemon::CellIo {
     std::lock_guard lock(mutex_);
     return worst_mm_;
   }
+  // A late reader: from now on each move leaves a reading of the arm half-way through it queued,
+  // and the next poll() delivers it before anything newer, as a pty holds the lines a run thread
+  // was too late to read while the arm moved.
+  void queueReadingsInMotion() {
+    std::lock_guard lock(mutex_);
+    queue_in_motion_ = true;
+  }
   int halts() const {
     std::lock_guard lock(mutex_);
     return halts_;
@@ -76,6 +84,12 @@ class ScriptedCell final : public daemon::CellIo {
   bool barConnected() const override { return true; }
   bool barStale() const override { return false; }
   bool poll(Clock::time_point until) override {
+    std::optional<drivers::BarReading> queued;
+    {
+      std::lock_guard lock(mutex_);
+      queued.swap(queued_);
+    }
+    if (queued && on_bar_) on_bar_(*queued);
     emitReading();
     std::this_thread::sleep_until(std::min(until, Clock::now() + std::chrono::milliseconds(5)));
     return true;
@@ -98,6 +112,7 @@ class ScriptedCell final : public daemon::CellIo {
       {
         std::lock_guard lock(mutex_);
         joints_ = from + (target - from) * (static_cast<double>(k) / kSteps);
+        if (queue_in_motion_ && k == kSteps / 2) queued_ = readingLocked();
       }
       emitReading();
       try {
@@ -123,19 +138,25 @@ class ScriptedCell final : public daemon::CellIo {
     drivers::BarReading r;
     {
       std::lock_guard lock(mutex_);
-      r.value_mm = kFreeReadingMm;
-      if (attached_) {
-        const Kinematics kin(truth_);
-        const double distance_mm =
-            (kin.ballPosition(joints_, truth_.balls_mm[ball_]) - truth_.chucks_mm[chuck_]).norm();
-        r.value_mm = distance_mm - bar_length_mm_ - extension_mm_;
-        worst_mm_ = std::max(worst_mm_, std::abs(r.value_mm));
-      }
-      r.sequence = ++sequence_;
+      r = readingLocked();
     }
+    if (on_bar_) on_bar_(r);
+  }
+  // The bar's reading where the arm is now (the mutex held).
+  drivers::BarReading readingLocked() {
+    drivers::BarReading r;
+    r.value_mm = kFreeReadingMm;
+    if (attached_) {
+      const Kinematics kin(truth_);
+      const double distance_mm =
+          (kin.ballPosition(joints_, truth_.balls_mm[ball_]) - truth_.chucks_mm[chuck_]).norm();
+      r.value_mm = distance_mm - bar_length_mm_ - extension_mm_;
+      worst_mm_ = std::max(worst_mm_, std::abs(r.value_mm));
+    }
+    r.sequence = ++sequence_;
     r.time = Clock::now();
     r.line = std::to_string(r.value_mm);
-    if (on_bar_) on_bar_(r);
+    return r;
   }
 
   static constexpr double kFreeReadingMm = 0.2;  // a free bar rests at its spring's end
@@ -150,6 +171,8 @@ class ScriptedCell final : public daemon::CellIo {
   std::string fail_what_;
   double worst_mm_ = 0;
   std::uint64_t sequence_ = 0;
+  bool queue_in_motion_ = false;
+  std::optional<drivers::BarReading> queued_;  // delivered by the next poll(), before the rest
   BarHandler on_bar_;
 };
 

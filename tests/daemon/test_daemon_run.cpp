@@ -69,6 +69,7 @@ TEST_CASE("a full run to RESULT recovers the true robot", "[e2e]") {
   // assess the fit with the same code (solver/assessment.hpp, formats/report.hpp).
   const auto solved = runRobocal("solve --model " + kModel + " " +
                                  result["samples_file"].get<std::string>() + " --json");
+  INFO(solved.output);
   REQUIRE(solved.exit_code == 0);
   json without_run_keys = result;
   for (const char* key : {"run", "set", "extension_mm", "calibrated_file", "report_dir",

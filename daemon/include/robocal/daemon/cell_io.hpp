@@ -44,7 +44,8 @@ class CellIo {
   virtual bool barConnected() const = 0;
   // The bar has been silent longer than its stale_after_s.
   virtual bool barStale() const = 0;
-  // Delivers what arrives until `until`; false when nothing could arrive (no device open).
+  // Delivers what has already arrived, even when `until` has passed, then what arrives until
+  // `until`; false when nothing could arrive (no device open).
   virtual bool poll(Clock::time_point until) = 0;
   virtual JointsDeg where() = 0;
   // Moves and waits for the end of the move; driver errors (a controller error, an E-stop, a
