@@ -416,7 +416,10 @@ JointsDeg approachPrePoint(const Kinematics& kin, const Eigen::Vector3d& ball,
     pre_q[best] -= std::min(change_mm / gradient[best], 10 * step_deg);
     for (int newton = 0; newton < 3; ++newton)  // onto the shell exactly, as every other step
       pre_q[best] -= (kin.barLength(pre_q, ball, chuck) - at_q) / gradient[best];
-    if (pre_q[best] > q[best] - step_deg) pre_q[best] = q[best] - step_deg;
+    // Where the gradient is too flat for Newton to converge it runs off (once to -47,864 deg):
+    // a pre-point stays within a degree of its point, and the pose check then judges the bar.
+    constexpr double kMaxBackDeg = 1.0;
+    pre_q[best] = std::clamp(pre_q[best], q[best] - kMaxBackDeg, q[best] - step_deg);
   }
   return pre_q;
 }

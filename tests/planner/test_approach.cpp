@@ -6,6 +6,7 @@
 #include <robocal/planner/plan.hpp>
 #include <robocal/robot/puma560.hpp>
 
+#include <random>
 #include <set>
 
 using namespace robocal;
@@ -72,4 +73,28 @@ TEST_CASE("approach stages: one pre-point when it keeps the bar, groups of joint
   const auto none = approachStages(kin, ball, chuck, q, step, 1e-9, left_out);
   checkStages(kin, ball, chuck, q, step, 1e-9, none, left_out);
   CHECK(left_out.size() >= 5);
+}
+
+TEST_CASE("approach pre-point: every joint a step back, one joint at most a degree further") {
+  // Over random poses and connections, also where the bar's length hardly depends on any joint
+  // and Newton's step to keep the ball on the shell would run off (the shipped plan once had a
+  // pre-point 47,864 deg back in joint 2).
+  const Model puma = loadModelFile(ROBOCAL_SOURCE_DIR "/config/puma560.json");
+  const Kinematics kin(puma);
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> angle(-180, 180);
+  const double step = 0.02;
+  int further = 0;
+  for (int trial = 0; trial < 5000; ++trial) {
+    JointsDeg q;
+    for (int j = 0; j < kJointCount; ++j) q[j] = angle(rng);
+    const Eigen::Vector3d ball = puma.balls_mm[trial % 3], chuck = puma.chucks_mm[(trial / 3) % 3];
+    const JointsDeg pre = approachPrePoint(kin, ball, chuck, q, step);
+    const JointsDeg back = q - pre;
+    INFO("trial " << trial << ": back " << back.transpose());
+    REQUIRE(back.minCoeff() >= step - 1e-9);
+    REQUIRE(back.maxCoeff() <= 1.0 + 1e-9);
+    further += back.maxCoeff() > step + 1e-9;
+  }
+  CHECK(further > 1000);  // the joint that keeps the ball on the shell does step further
 }
