@@ -5,10 +5,11 @@
 # extension), and a simulated operator answers the connection prompts. Output in out/.
 # The true robot is not its model: it carries a real arm's backlash, gravity compliance and
 # warm-up and the LVDT's errors (ROBOCAL_REALISM, default typical: docs/realism.md; ideal for a
-# robot that is exactly its model). Every point is approached from below in each joint
-# (motion.approach_deg ROBOCAL_APPROACH_DEG, default 0.02; 0 for none) so that backlash is
-# designed out (docs/accuracy.md), and every 20th point is measured again (motion.revisit_every
-# ROBOCAL_REVISIT_EVERY; 0 for none) so that the fit measures the bar's noise, and each shell's
+# robot that is exactly its model). As the shipped cells have it, every point is approached from
+# below in each joint (motion.approach_deg, 0.02; ROBOCAL_APPROACH_DEG overrides, 0 for none) so
+# that backlash is designed out (docs/accuracy.md), and every 20th point is measured again
+# (motion.revisit_every; ROBOCAL_REVISIT_EVERY, 0 for none) so that the fit measures the bar's
+# noise; here, beyond the cell, each shell's
 # first point every 5 minutes of robot time (motion.reference_every_min
 # ROBOCAL_REFERENCE_EVERY_MIN; 0 for none) so that it measures the drift over the run.
 # ROBOCAL_PLAN_BUDGET_MIN=M runs an optimal plan of M minutes of cell time instead of the
@@ -40,7 +41,10 @@ realism=${ROBOCAL_REALISM:-typical}
 rm -rf "$out"
 mkdir -p "$out"
 cell=$out/cell.json
-jq ".motion.approach_deg = ${ROBOCAL_APPROACH_DEG:-0.02} | .motion.revisit_every = ${ROBOCAL_REVISIT_EVERY:-20}
+# The cell's approach and revisits unless set here; a reference pose every 5 minutes, so that the
+# run's drift is reported (the shipped cell leaves it off: docs/accuracy.md, "Drift").
+jq ".motion.approach_deg = ${ROBOCAL_APPROACH_DEG:-.motion.approach_deg}
+    | .motion.revisit_every = ${ROBOCAL_REVISIT_EVERY:-.motion.revisit_every}
     | .motion.reference_every_min = ${ROBOCAL_REFERENCE_EVERY_MIN:-5}" \
   "${ROBOCAL_CELL:-$robot_cell}" >"$cell"
 pids=()

@@ -6,6 +6,7 @@
 # table row a plan (mean over the seeds of the work-volume RMS tool position error) and writes
 # the figure of error against cell time to OUT_SVG.
 # Usage: scripts/plan-seeds.sh [SEEDS (default 10)] [OUT_SVG (default docs/figures/cell-time.svg)]
+# ROBOCAL_CELL: the cell file (default config/cell.json).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${ROBOCAL_BUILD_DIR:-$root/build}
@@ -13,7 +14,7 @@ bin=$build/cli/robocal
 seeds=${1:-10}
 svg=${2:-$root/docs/figures/cell-time.svg}
 model=$root/config/puma560.json
-cell=$root/config/cell.json
+cell=${ROBOCAL_CELL:-$root/config/cell.json}
 budgets=${ROBOCAL_PLAN_BUDGETS_MIN:-"18 27 36 54 90"}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT

@@ -10,6 +10,7 @@
 # default is 0.1). The box with the shoulder left is mostly outside the PUMA's joint limits: the
 # table gives how many of its 200 poses were solved.
 # ROBOCAL_REALISM: the true robots' realism (robocal simulate --realism; default ideal).
+# ROBOCAL_CELL: the cell file (default config/cell.json).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${ROBOCAL_BUILD_DIR:-$root/build}
@@ -17,7 +18,7 @@ bin=$build/cli/robocal
 seeds=${1:-10}
 budget=${2:-32}
 model=$root/config/puma560.json
-cell=$root/config/cell.json
+cell=${ROBOCAL_CELL:-$root/config/cell.json}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 

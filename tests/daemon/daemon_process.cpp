@@ -127,6 +127,11 @@ nlohmann::json smallCell(const std::vector<std::string>& connections,
   nlohmann::json cell = nlohmann::json::parse(readTextFile(ROBOCAL_SOURCE_DIR "/config/cell.json"));
   cell["connections"] = connections;
   cell["bar"]["extension_lengths_mm"] = extensions_mm;
+  // Plain points: the tests that run the shipped cell's approach pre-points, revisits and
+  // reference pose through robocald set them again (and keep the rest fast).
+  cell["motion"]["approach_deg"] = 0;
+  cell["motion"]["revisit_every"] = 0;
+  cell["motion"]["reference_every_min"] = 0;
   cell["grid"] = {{"latitude_first_deg", 20.0},
                   {"latitude_last_deg", 80.0},
                   {"latitude_step_deg", 30.0},

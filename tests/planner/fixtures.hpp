@@ -15,8 +15,23 @@ inline const Model& nominal() {
   return m;
 }
 
-inline const CellConfig& defaultCell() {
+// The shipped reference cell as its file has it (config/cell.json).
+inline const CellConfig& shippedCell() {
   static const CellConfig c = loadCellFile(kSource + "/config/cell.json");
+  return c;
+}
+
+// The shipped cell's grid, shells, tool and margins with plain points: no approach pre-points,
+// revisits or reference pose, which their own tests turn on (test_plan.cpp). The grid's tests
+// count its points and steps.
+inline const CellConfig& gridCell() {
+  static const CellConfig c = [] {
+    CellConfig plain = shippedCell();
+    plain.motion.approach_deg = 0;
+    plain.motion.revisit_every = 0;
+    plain.motion.reference_every_min = 0;
+    return plain;
+  }();
   return c;
 }
 

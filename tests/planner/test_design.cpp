@@ -17,14 +17,14 @@
 #include <random>
 
 using namespace robocal;
-using test::defaultCell;
+using test::gridCell;
 using test::nominal;
 
 namespace {
 
 // Three connections that use every ball and chuck, one extension: plans in about a second.
 CellConfig smallCell() {
-  CellConfig cell = defaultCell();
+  CellConfig cell = gridCell();
   cell.connections = parseConnections("B1C2,B2C3,B3C1");
   cell.bar.extension_lengths_mm = {0, 150};
   cell.grid.latitude_step_deg = 20;
@@ -41,7 +41,7 @@ DesignOptions smallOptions() {
 
 const std::vector<JointsDeg>& workJoints() {
   static const std::vector<JointsDeg> joints = [] {
-    WorkVolume work = defaultCell().work_volume;
+    WorkVolume work = gridCell().work_volume;
     work.poses = 60;
     return workVolumeJoints(work, Compensator(nominal(), nominal()));
   }();

@@ -30,12 +30,12 @@ using namespace robocal;
 
 namespace {
 
-using test::defaultCell;
+using test::gridCell;
 using test::kSource;
 using test::nominal;
 
 const Plan& checkPlanOfDefaultCell() {
-  static const Plan p = planHealthCheck(nominal(), defaultCell());
+  static const Plan p = planHealthCheck(nominal(), gridCell());
   return p;
 }
 
@@ -111,16 +111,16 @@ TEST_CASE("the check's connections use every ball and every chuck, from the cell
 }
 
 TEST_CASE("the check cell keeps the calibration's bar, tool, margins and motion") {
-  const CellConfig cell = healthCheckCell(defaultCell());
+  const CellConfig cell = healthCheckCell(gridCell());
   CHECK(connectionList(cell.connections) == "B1C2,B2C3");  // the first two of the three
   REQUIRE(cell.bar.extension_lengths_mm.size() == 1);
   CHECK(cell.bar.extension_lengths_mm[0] == 75.0);
   // The candidates' grid: 8 latitudes, 18 longitudes.
   CHECK(gridLatitudes(cell.grid).size() * gridLongitudes(cell.grid).size() == 144);
-  CHECK(cell.bar.nominal_length_mm == defaultCell().bar.nominal_length_mm);
-  CHECK(cell.motion.settle_s == defaultCell().motion.settle_s);
-  CHECK(cell.margins.table_clearance_mm == defaultCell().margins.table_clearance_mm);
-  CHECK(cell.tool.min_bar_tool_angle_deg == defaultCell().tool.min_bar_tool_angle_deg);
+  CHECK(cell.bar.nominal_length_mm == gridCell().bar.nominal_length_mm);
+  CHECK(cell.motion.settle_s == gridCell().motion.settle_s);
+  CHECK(cell.margins.table_clearance_mm == gridCell().margins.table_clearance_mm);
+  CHECK(cell.tool.min_bar_tool_angle_deg == gridCell().tool.min_bar_tool_angle_deg);
   CHECK_NOTHROW(validateCell(cell));
 }
 
@@ -145,7 +145,7 @@ TEST_CASE("the check's points are where the changes it must see move the bar mos
   // Against the same number of points of the old coarse grid (latitudes 30 and 70, longitudes
   // every 30 deg) on the same shells: the weakest parameter's signal is larger.
   const Plan& designed = checkPlanOfDefaultCell();
-  CellConfig grid_cell = healthCheckCell(defaultCell());
+  CellConfig grid_cell = healthCheckCell(gridCell());
   grid_cell.grid = {30, 70, 40, 0, 60};  // 2 x 6 = 12 a shell
   const Plan grid = planCell(nominal(), grid_cell);
   auto weakest = [](const Plan& plan) {
@@ -174,20 +174,20 @@ TEST_CASE("the check's points are where the changes it must see move the bar mos
 
 TEST_CASE("check-plan accepts the check plan against the calibration's cell and its own") {
   const Plan& plan = checkPlanOfDefaultCell();
-  for (const auto& v : checkPlan(nominal(), defaultCell(), plan)) FAIL(describeViolation(v));
-  for (const auto& v : checkPlan(nominal(), healthCheckCell(defaultCell()), plan))
+  for (const auto& v : checkPlan(nominal(), gridCell(), plan)) FAIL(describeViolation(v));
+  for (const auto& v : checkPlan(nominal(), healthCheckCell(gridCell()), plan))
     FAIL(describeViolation(v));
   // A calibration plan may not use the check's extension: only the purpose allows it.
   Plan as_calibration = plan;
   as_calibration.purpose = PlanPurpose::kCalibration;
-  const auto v = checkPlan(nominal(), defaultCell(), as_calibration);
+  const auto v = checkPlan(nominal(), gridCell(), as_calibration);
   REQUIRE(v.size() == kHealthCheckShells);
   CHECK(v[0].rule == "extension");
   // Nor may a check plan use any other extension.
   Plan other = plan;
   other.shells[1].extension_mm = 50;
   other.shells[1].radius_mm = 200;
-  const auto w = checkPlan(nominal(), defaultCell(), other);
+  const auto w = checkPlan(nominal(), gridCell(), other);
   REQUIRE_FALSE(w.empty());
   CHECK(w[0].rule == "extension");
   CHECK_THAT(w[0].message, Catch::Contains("nor its check extension"));
@@ -197,7 +197,7 @@ TEST_CASE("the plan file says what the plan is for, and old files are calibratio
   const Plan back = parsePlan(formatPlan(checkPlanOfDefaultCell()), "check.json");
   CHECK(back.purpose == PlanPurpose::kCheck);
   CHECK(back.summary.points == checkPlanOfDefaultCell().summary.points);
-  CHECK(checkPlan(nominal(), defaultCell(), back).empty());
+  CHECK(checkPlan(nominal(), gridCell(), back).empty());
 
   nlohmann::json j = nlohmann::json::parse(formatPlan(checkPlanOfDefaultCell()));
   CHECK(j["purpose"] == "check");

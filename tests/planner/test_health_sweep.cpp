@@ -26,11 +26,11 @@ using namespace robocal;
 
 namespace {
 
-using test::defaultCell;
+using test::gridCell;
 using test::nominal;
 
 const Plan& checkPlanOfDefaultCell() {
-  static const Plan p = planHealthCheck(nominal(), defaultCell());
+  static const Plan p = planHealthCheck(nominal(), gridCell());
   return p;
 }
 

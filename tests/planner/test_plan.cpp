@@ -27,13 +27,14 @@ using namespace robocal;
 
 namespace {
 
-using test::defaultCell;
+using test::gridCell;
 using test::kSource;
 using test::nominal;
+using test::shippedCell;
 
-// The default cell's plan, made once for all the tests that read it.
-const Plan& defaultPlan() {
-  static const Plan p = planCell(nominal(), defaultCell());
+// The grid cell's plan, made once for all the tests that read it.
+const Plan& gridPlan() {
+  static const Plan p = planCell(nominal(), gridCell());
   return p;
 }
 
@@ -92,14 +93,14 @@ int runCommand(const std::string& command, std::string& output) {
 }  // namespace
 
 TEST_CASE("the default cell plans nine shells per extension, each with at least 80 points") {
-  const Plan& plan = defaultPlan();
+  const Plan& plan = gridPlan();
   REQUIRE(plan.shells.size() == 18);
   for (const ShellPlan& s : plan.shells) {
     INFO("shell " << s.shell << " " << connectionName(s.connection));
     CHECK(s.summary.points >= 80);
-    CHECK(s.radius_mm == Approx(defaultCell().bar.nominal_length_mm + s.extension_mm));
-    CHECK(s.summary.max_deviation_mm <= defaultCell().motion.via_tolerance_mm);
-    CHECK(s.summary.duration_s > s.summary.points * defaultCell().motion.settle_s);
+    CHECK(s.radius_mm == Approx(gridCell().bar.nominal_length_mm + s.extension_mm));
+    CHECK(s.summary.max_deviation_mm <= gridCell().motion.via_tolerance_mm);
+    CHECK(s.summary.duration_s > s.summary.points * gridCell().motion.settle_s);
     // Every grid point is either planned or listed as dropped, with a reason.
     CHECK(s.summary.points + static_cast<int>(s.dropped.size()) == 8 * 12);
     for (const DroppedPoint& d : s.dropped) CHECK_FALSE(d.reason.empty());
@@ -111,23 +112,23 @@ TEST_CASE("the default cell plans nine shells per extension, each with at least 
 }
 
 TEST_CASE("the default plan identifies all 36 independent parameters") {
-  const PlanIdentifiability all = planIdentifiability(nominal(), defaultPlan());
+  const PlanIdentifiability all = planIdentifiability(nominal(), gridPlan());
   CHECK(all.rank == 36);
   CHECK(all.condition_number > 1);
   CHECK(all.condition_number < 1e4);
   for (double e : {0.0, 150.0}) {
     INFO("extension " << e);
-    CHECK(planIdentifiability(nominal(), defaultPlan(), e).rank == 36);
+    CHECK(planIdentifiability(nominal(), gridPlan(), e).rank == 36);
   }
 }
 
 TEST_CASE("every move of the plan keeps the nominal radial deviation within via_tolerance",
           "[heavy]") {
   const Kinematics kin(nominal());
-  const double tol = defaultCell().motion.via_tolerance_mm;
+  const double tol = gridCell().motion.via_tolerance_mm;
   double worst = 0;
   long segments = 0;
-  for (const ShellPlan& s : defaultPlan().shells) {
+  for (const ShellPlan& s : gridPlan().shells) {
     JointsDeg prev = s.connect.joints_deg;
     for (size_t i = 0; i < s.steps.size(); ++i) {
       const double d = worstDeviation(kin, nominal(), s, prev, s.steps[i].joints_deg);
@@ -145,9 +146,9 @@ TEST_CASE("every move of the plan keeps the nominal radial deviation within via_
 TEST_CASE(
     "every pose of the plan is inside the limits minus the margin, away from "
     "singularities, in its shell's configuration") {
-  const CellConfig& cell = defaultCell();
+  const CellConfig& cell = gridCell();
   const PumaIk ik(nominal());
-  for (const ShellPlan& s : defaultPlan().shells) {
+  for (const ShellPlan& s : gridPlan().shells) {
     std::vector<const PlanStep*> poses = {&s.connect};
     for (const PlanStep& st : s.steps) poses.push_back(&st);
     for (size_t i = 0; i < poses.size(); ++i) {
@@ -165,8 +166,8 @@ TEST_CASE(
 
 TEST_CASE("check-plan accepts the plan, also after a round trip through the file format",
           "[heavy]") {
-  const Plan& plan = defaultPlan();
-  CHECK(checkPlan(nominal(), defaultCell(), plan).empty());
+  const Plan& plan = gridPlan();
+  CHECK(checkPlan(nominal(), gridCell(), plan).empty());
   const Plan back = parsePlan(formatPlan(plan), "round trip");
   REQUIRE(back.shells.size() == plan.shells.size());
   for (size_t i = 0; i < plan.shells.size(); ++i) {
@@ -176,18 +177,18 @@ TEST_CASE("check-plan accepts the plan, also after a round trip through the file
     CHECK(back.shells[i].dropped.size() == plan.shells[i].dropped.size());
   }
   CHECK(back.summary.points == plan.summary.points);
-  const auto violations = checkPlan(nominal(), defaultCell(), back);
+  const auto violations = checkPlan(nominal(), gridCell(), back);
   for (const auto& v : violations) UNSCOPED_INFO(describeViolation(v));
   CHECK(violations.empty());
 }
 
 TEST_CASE("check-plan catches a hand-corrupted plan and names the step", "[heavy]") {
-  Plan plan = defaultPlan();
+  Plan plan = gridPlan();
   ShellPlan& shell = plan.shells[2];
   SECTION("a joint nudged by 2 degrees") {
     size_t index = 10;
     shell.steps[index].joints_deg[1] += 2.0;
-    const auto v = checkPlan(nominal(), defaultCell(), plan);
+    const auto v = checkPlan(nominal(), gridCell(), plan);
     REQUIRE_FALSE(v.empty());
     CHECK(v[0].shell == shell.shell);
     CHECK(v[0].step == static_cast<int>(index));
@@ -196,14 +197,14 @@ TEST_CASE("check-plan catches a hand-corrupted plan and names the step", "[heavy
     size_t via = 0;
     while (shell.steps[via].kind != StepKind::kVia) ++via;
     shell.steps.erase(shell.steps.begin() + static_cast<long>(via));
-    const auto v = checkPlan(nominal(), defaultCell(), plan);
+    const auto v = checkPlan(nominal(), gridCell(), plan);
     REQUIRE(v.size() == 1);
     CHECK(v[0].rule == "deviation");
     CHECK(v[0].step == static_cast<int>(via));  // the move that now ends at the old next step
   }
   SECTION("a joint past its limit") {
     shell.steps[5].joints_deg[4] = 99.0;  // J5 limit is 100, margin 5
-    const auto v = checkPlan(nominal(), defaultCell(), plan);
+    const auto v = checkPlan(nominal(), gridCell(), plan);
     REQUIRE_FALSE(v.empty());
     bool found = false;
     for (const auto& x : v) found |= x.step == 5 && x.rule == "limits";
@@ -211,13 +212,13 @@ TEST_CASE("check-plan catches a hand-corrupted plan and names the step", "[heavy
   }
   SECTION("a configuration flipped") {
     shell.config.wrist_flip = !shell.config.wrist_flip;
-    const auto v = checkPlan(nominal(), defaultCell(), plan);
+    const auto v = checkPlan(nominal(), gridCell(), plan);
     CHECK(v.size() == shell.steps.size() + 1);  // every pose of that shell
     CHECK(v[0].rule == "configuration");
   }
   SECTION("a wrong extension") {
     shell.extension_mm = 50;
-    const auto v = checkPlan(nominal(), defaultCell(), plan);
+    const auto v = checkPlan(nominal(), gridCell(), plan);
     REQUIRE_FALSE(v.empty());
     CHECK(v[0].rule == "extension");
   }
@@ -225,7 +226,7 @@ TEST_CASE("check-plan catches a hand-corrupted plan and names the step", "[heavy
 
 TEST_CASE("robocal check-plan prints each violation with its step and exits non-zero",
           "[cli][heavy]") {
-  nlohmann::json j = nlohmann::json::parse(formatPlan(defaultPlan()));
+  nlohmann::json j = nlohmann::json::parse(formatPlan(gridPlan()));
   const std::string good = tempPath("good_plan.json");
   const std::string bad = tempPath("bad_plan.json");
   const TempFiles cleanup{{good, bad}};
@@ -244,19 +245,19 @@ TEST_CASE("robocal check-plan prints each violation with its step and exits non-
 }
 
 TEST_CASE("singularity margins reject poses near a singularity") {
-  const ShellPlanner planner(nominal(), defaultCell());
+  const ShellPlanner planner(nominal(), gridCell());
   const Connection c{0, 0};
   // A planned pose, then the same with joint 5 turned close to zero.
-  const PlanStep& step = defaultPlan().shells[0].steps[0];
-  CHECK(planner.poseProblem(c, defaultPlan().shells[0].radius_mm, step.joints_deg, 0.5).empty());
+  const PlanStep& step = gridPlan().shells[0].steps[0];
+  CHECK(planner.poseProblem(c, gridPlan().shells[0].radius_mm, step.joints_deg, 0.5).empty());
   JointsDeg q = step.joints_deg;
   q[4] = 3.0;
-  const std::string problem = planner.poseProblem(c, defaultPlan().shells[0].radius_mm, q, 1e9);
+  const std::string problem = planner.poseProblem(c, gridPlan().shells[0].radius_mm, q, 1e9);
   CHECK(problem.find("wrist") != std::string::npos);
 
   // A shoulder margin no pose can keep (the arm reaches less than 2 m): every point of the
   // shell is dropped with that reason, and planning the cell fails with a clear error.
-  CellConfig cell = defaultCell();
+  CellConfig cell = gridCell();
   cell.connections = {Connection{0, 0}};
   cell.bar.extension_lengths_mm = {0};
   cell.margins.shoulder_singularity_mm = 2000;
@@ -266,7 +267,7 @@ TEST_CASE("singularity margins reject poses near a singularity") {
   for (const DroppedPoint& d : shell.dropped)
     CHECK(d.reason.find("shoulder singularity") != std::string::npos);
   CHECK_THROWS_AS(planCell(nominal(), cell), PlanError);
-  cell.margins.shoulder_singularity_mm = defaultCell().margins.shoulder_singularity_mm;
+  cell.margins.shoulder_singularity_mm = gridCell().margins.shoulder_singularity_mm;
 
   // A moderate margin: fewer points, but every planned pose keeps it.
   cell.margins.wrist_singularity_deg = 30;
@@ -279,7 +280,7 @@ TEST_CASE("singularity margins reject poses near a singularity") {
 TEST_CASE(
     "unreachable grids: out-of-reach shells are refused, partly reachable ones list the "
     "dropped points") {
-  CellConfig cell = defaultCell();
+  CellConfig cell = gridCell();
   cell.connections = {Connection{1, 2}};
   SECTION("a radius far beyond the arm's reach") {
     cell.bar.extension_lengths_mm = {3000};
@@ -320,7 +321,7 @@ TEST_CASE(
 }
 
 TEST_CASE("a fixed arm configuration is kept on every shell") {
-  CellConfig cell = defaultCell();
+  CellConfig cell = gridCell();
   cell.arm_configuration = "right-up-noflip";
   cell.bar.extension_lengths_mm = {0};
   cell.connections = {Connection{0, 0}, Connection{2, 2}};
@@ -337,8 +338,8 @@ TEST_CASE("a fixed arm configuration is kept on every shell") {
 TEST_CASE("re-planning the rest of a shell with a refined model keeps it safe for that model") {
   std::mt19937_64 rng(3);
   const Model truth = perturbModel(nominal(), PerturbationSigmas{}, rng);
-  const ShellPlan& old = defaultPlan().shells[4];
-  const ShellPlanner planner(truth, defaultCell());
+  const ShellPlan& old = gridPlan().shells[4];
+  const ShellPlanner planner(truth, gridCell());
   const size_t next = old.steps.size() / 2;
   const JointsDeg here = old.steps[next - 1].joints_deg;
   const ShellPlan fresh = planner.replanRemaining(old, next, here);
@@ -360,12 +361,12 @@ TEST_CASE("re-planning the rest of a shell with a refined model keeps it safe fo
   // The new steps keep every rule for the refined model. (The robot's current pose was planned
   // for the old model, so the check starts at the first re-planned step.)
   Plan rest;
-  rest.cell = defaultCell();
+  rest.cell = gridCell();
   ShellPlan part = fresh;
   part.connect = fresh.steps[next];
   part.steps.assign(fresh.steps.begin() + static_cast<long>(next) + 1, fresh.steps.end());
   rest.shells.push_back(part);
-  const auto v = checkPlan(truth, defaultCell(), rest);
+  const auto v = checkPlan(truth, gridCell(), rest);
   for (const auto& x : v) UNSCOPED_INFO(describeViolation(x));
   CHECK(v.empty());
   // And the points are on the refined model's shell.
@@ -392,10 +393,18 @@ int pointsNotApproachedFromBelow(const ShellPlan& shell, size_t from = 0) {
 
 }  // namespace
 
-TEST_CASE("with approach_deg every point is approached from below in every joint") {
-  CellConfig cell = defaultCell();
-  cell.motion.approach_deg = 0.02;
+TEST_CASE(
+    "the shipped cell's plan reaches every point from below in every joint (approach_deg), "
+    "revisits a few, and check-plan accepts it") {
+  const CellConfig& cell = shippedCell();
+  CHECK(cell.motion.approach_deg == 0.02);
+  CHECK(cell.motion.revisit_every > 0);
   const Plan plan = planCell(nominal(), cell);
+  int revisits = 0;
+  for (const ShellPlan& shell : plan.shells)
+    for (const PlanStep& step : shell.steps)
+      revisits += step.kind == StepKind::kPoint && step.visit;
+  CHECK(revisits > plan.summary.points / cell.motion.revisit_every / 2);
   int points = 0;
   for (const ShellPlan& shell : plan.shells) {
     INFO("shell " << shell.shell);
@@ -413,7 +422,7 @@ TEST_CASE("with approach_deg every point is approached from below in every joint
       ShellPlanner(truth, cell).replanRemaining(old, next, old.steps[next - 1].joints_deg);
   CHECK(pointsNotApproachedFromBelow(fresh, next + 1) == 0);
   // Without it (the default), many points are reached from above in some joint.
-  const ShellPlan& plain = defaultPlan().shells[2];
+  const ShellPlan& plain = gridPlan().shells[2];
   CHECK(pointsNotApproachedFromBelow(plain) > plain.summary.points / 4);
 }
 
@@ -435,7 +444,7 @@ Plan checkedAndKeptInFile(const CellConfig& cell, const ShellPlan& shell) {
 }  // namespace
 
 TEST_CASE("with revisit_every a few points are measured again, reached the same way, and kept") {
-  CellConfig cell = defaultCell();
+  CellConfig cell = gridCell();
   cell.motion.approach_deg = 0.02;
   cell.motion.revisit_every = 20;
   const ShellPlan shell = ShellPlanner(nominal(), cell).planShell({0, 0}, 0, 1);
@@ -475,7 +484,7 @@ TEST_CASE("with revisit_every a few points are measured again, reached the same 
 }
 
 TEST_CASE("with reference_every_min the shell's first point is measured again every few minutes") {
-  CellConfig cell = defaultCell();
+  CellConfig cell = gridCell();
   cell.motion.approach_deg = 0.02;
   cell.motion.reference_every_min = 2;
   const ShellPlanner planner(nominal(), cell);
@@ -528,7 +537,7 @@ TEST_CASE("with reference_every_min the shell's first point is measured again ev
 }
 
 TEST_CASE("the deflection forecast grows with the model uncertainty") {
-  Plan plan = defaultPlan();
+  Plan plan = gridPlan();
   std::mt19937_64 rng(5);
   PerturbationSigmas small;
   small.translation_mm = 0.02;
@@ -552,7 +561,7 @@ TEST_CASE("the deflection forecast grows with the model uncertainty") {
 }
 
 TEST_CASE("robocal simulate --plan samples at the plan's data points", "[cli]") {
-  CellConfig cell = defaultCell();
+  CellConfig cell = gridCell();
   cell.connections = {Connection{0, 1}, Connection{2, 0}};
   cell.bar.extension_lengths_mm = {0};
   const Plan plan = planCell(nominal(), cell);
@@ -586,12 +595,12 @@ TEST_CASE("robocal simulate --plan samples at the plan's data points", "[cli]") 
 }
 
 TEST_CASE("the flange and the wrist centre keep their distance from the bar") {
-  const ShellPlan& shell = defaultPlan().shells[0];
-  const ShellPlanner planner(nominal(), defaultCell());
+  const ShellPlan& shell = gridPlan().shells[0];
+  const ShellPlanner planner(nominal(), gridCell());
   const PoseReport r =
       planner.inspect(shell.connection, shell.radius_mm, shell.steps[0].joints_deg);
-  CHECK(r.bar_clearance_mm >= defaultCell().margins.bar_clearance_mm);
-  CellConfig cell = defaultCell();
+  CHECK(r.bar_clearance_mm >= gridCell().margins.bar_clearance_mm);
+  CellConfig cell = gridCell();
   cell.margins.bar_clearance_mm = r.bar_clearance_mm + 1.0;
   const ShellPlanner strict(nominal(), cell);
   const std::string problem =

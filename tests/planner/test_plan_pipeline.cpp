@@ -11,7 +11,7 @@ using namespace robocal::test;
 
 TEST_CASE(
     "the plan pipeline: a grid plan with its predicted errors and forecast, a check without") {
-  CellConfig cell = defaultCell();
+  CellConfig cell = gridCell();
   cell.connections = {{0, 0}, {1, 1}, {2, 2}};  // three connections: rank 36, quick
   const PlannedCell grid = planCalibration(nominal(), cell, {PlanKind::kGrid, {}});
   const PlanSummary& s = grid.plan.summary;
@@ -33,11 +33,11 @@ TEST_CASE(
         Approx(2 * s.predicted_work_volume_error_mm).epsilon(1e-6));
 
   // A check is judged, not fitted: no predicted error; its forecast only with a nominal model.
-  const PlannedCell check = planCalibration(nominal(), defaultCell(), {PlanKind::kCheck, {}});
+  const PlannedCell check = planCalibration(nominal(), gridCell(), {PlanKind::kCheck, {}});
   CHECK(check.plan.purpose == PlanPurpose::kCheck);
   CHECK(check.plan.summary.predicted_work_volume_error_mm < 0);
   CHECK(check.forecast);
   Model calibrated = nominal();
   calibrated.provenance = ModelProvenance{};
-  CHECK_FALSE(planCalibration(calibrated, defaultCell(), {PlanKind::kCheck, {}}).forecast);
+  CHECK_FALSE(planCalibration(calibrated, gridCell(), {PlanKind::kCheck, {}}).forecast);
 }
