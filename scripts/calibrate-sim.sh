@@ -43,8 +43,8 @@ mkdir -p "$out"
 cell=$out/cell.json
 # The cell's approach and revisits unless set here; a reference pose every 5 minutes, so that the
 # run's drift is reported (the shipped cell leaves it off: docs/accuracy.md, "Drift").
-jq ".motion.approach_deg = ${ROBOCAL_APPROACH_DEG:-.motion.approach_deg}
-    | .motion.revisit_every = ${ROBOCAL_REVISIT_EVERY:-.motion.revisit_every}
+jq ".motion.approach_deg = ${ROBOCAL_APPROACH_DEG:-(.motion.approach_deg // 0)}
+    | .motion.revisit_every = ${ROBOCAL_REVISIT_EVERY:-(.motion.revisit_every // 0)}
     | .motion.reference_every_min = ${ROBOCAL_REFERENCE_EVERY_MIN:-5}" \
   "${ROBOCAL_CELL:-$robot_cell}" >"$cell"
 pids=()

@@ -253,14 +253,22 @@ for run_dir in "$out"/data/runs/*/; do
            { printf "%d,%.3f,%.3f\n", $col["shell"], $col["lat_deg"], $col["lon_deg"] }' \
     "$run_dir/samples.csv" | sort >"$run_dir.keys"
   n=$(wc -l <"$run_dir.keys")
-  dups=$(uniq -d "$run_dir.keys" | wc -l)
+  # A place the plan measures more than once (a revisit, a reference pose) is no duplicate until
+  # it is measured more often than planned.
+  : >"$run_dir.planned"
+  [[ -f $run_dir/plan.json ]] &&
+    jq -r '.shells[] | .shell as $s | .steps[] | select(.kind == "point")
+           | "\($s),\(.lat_deg),\(.lon_deg)"' "$run_dir/plan.json" |
+    awk -F, '{ printf "%d,%.3f,%.3f\n", $1, $2, $3 }' >"$run_dir.planned"
+  dups=$(awk 'FNR == NR { planned[$0]++; next } { seen[$0]++ }
+              END { for (k in seen) { p = planned[k] > 1 ? planned[k] : 1
+                                      if (seen[k] > p) d += seen[k] - p }
+                    print d + 0 }' "$run_dir.planned" "$run_dir.keys")
   samples_total=$((samples_total + n))
   dup_total=$((dup_total + dups))
   status=$(jq -r .status "$run_dir/state.json")
   if [[ $status == "done" ]]; then
-    jq -r '.shells[] | .shell as $s | .steps[] | select(.kind == "point")
-           | "\($s),\(.lat_deg),\(.lon_deg)"' "$run_dir/plan.json" |
-      awk -F, '{ printf "%d,%.3f,%.3f\n", $1, $2, $3 }' | sort -u >"$run_dir.expected"
+    sort -u "$run_dir.planned" >"$run_dir.expected"
     jq -r 'select(.event == "point_dropped") | "\(.shell),\(.lat_deg),\(.lon_deg)"' \
       "$run_dir/events.jsonl" | awk -F, '{ printf "%d,%.3f,%.3f\n", $1, $2, $3 }' |
       sort -u >"$run_dir.dropped"

@@ -307,6 +307,7 @@ RunContext::Measurement RunContext::measureHere(double window_s) {
   // Readings still queued from before the dwell ended (the run thread was late, e.g. on a loaded
   // machine) may be of the arm in motion: delivered now, they stay out of the window.
   io.poll(Clock::now());
+  watchBar();  // what they say of the bar counts as any reading's does
   window_.clear();
   const Collecting collect(collecting_);
   m.bar_window_start = Clock::now();

@@ -8,6 +8,8 @@
 #include "../cli/cli_helpers.hpp"
 #include "sim_cell.hpp"
 
+#include <robocal/daemon/cell_io.hpp>
+#include <robocal/daemon/config.hpp>
 #include <robocal/formats/model_json.hpp>
 #include <robocal/formats/samples_csv.hpp>
 #include <robocal/solver/calibrate.hpp>
@@ -17,6 +19,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <thread>
 
 using namespace robocal;
 using namespace robocal::test;
@@ -138,4 +141,24 @@ TEST_CASE("measure: fixed against adaptive dwell at real speed (docs/settling.md
         *std::max_element(f.dwell_s.begin(), f.dwell_s.end()), f.steady, f.readings, f.meanError(),
         f.rmsError(), window_noise_mm);
   }
+}
+
+TEST_CASE(
+    "the driver cell delivers the bar lines already queued even when the poll's deadline has "
+    "passed",
+    "[daemon]") {
+  // A run thread that comes late to a point's window polls with a deadline already past: what
+  // the bar sent meanwhile must still be read then, not later inside the window.
+  CellSimProcess sim({"--bar-mode", "streamed", "--stream-hz", "100", "--bar-mm", "150"});
+  daemon::DaemonConfig config;
+  config.drivers = sim.driversConfig();
+  config.drivers.bar.mode = "streamed";
+  const auto cell = daemon::makeDriverCell(config);
+  int lines = 0;
+  cell->onBarLine([&](const drivers::BarReading&) { ++lines; });
+  REQUIRE(cell->connect().bar_connected);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // lines queue up in the pty
+  const int before = lines;
+  cell->poll(daemon::CellIo::Clock::now() - std::chrono::seconds(1));
+  CHECK(lines > before);
 }

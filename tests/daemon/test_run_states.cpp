@@ -200,7 +200,6 @@ TEST_CASE("run states: readings queued while the arm moved stay out of the point
   for (const json& s : samples) {
     INFO(s.dump());
     CHECK(s["spread_mm"].get<double>() < 1e-9);
-    CHECK(s["readings"].get<int>() >= 1);
   }
 }
 

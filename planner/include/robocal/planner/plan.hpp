@@ -36,8 +36,9 @@ struct PlanStep {
 };
 
 // Where a point at `q` is approached from: every joint `step_deg` below it, and one joint
-// further so that the bar between `ball` (tool frame) and `chuck` keeps its length at q (within
-// what a step of 10 * step_deg of that joint can undo): each joint then moves into q upward and a
+// further so that the bar between `ball` (tool frame) and `chuck` keeps its length at q (that
+// joint at most 1 deg below q, so where it cannot, the pose check drops the point): each joint
+// then moves into q upward and a
 // real arm's backlash sits on the same side (motion.approach_deg; the daemon's connection check).
 JointsDeg approachPrePoint(const Kinematics& kin, const Eigen::Vector3d& ball,
                            const Eigen::Vector3d& chuck, const JointsDeg& q, double step_deg);
