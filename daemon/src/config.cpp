@@ -39,6 +39,7 @@ DaemonConfig daemonConfigFromJson(const json& root, const std::string& source,
   r.get("dwell_mode", c.dwell_mode);
   r.get("adaptive_window_s", c.adaptive_window_s, 0.01, 10);
   r.get("bar_noise_mm", c.bar_noise_mm, 0, 1);
+  r.get("adaptive_audit_every", c.adaptive_audit_every, 0, 100000);
   r.get("bar_soft_limit_mm", c.bar_soft_limit_mm, 0.01, 100);
   r.get("bar_hard_limit_mm", c.bar_hard_limit_mm, 0.01, 100);
   r.get("centering", c.centering);
@@ -77,10 +78,11 @@ DaemonConfig daemonConfigFromJson(const json& root, const std::string& source,
     r.fail("check_warn_ratio", "must not be above check_fail_ratio");
   if (c.dwell_mode != "fixed" && c.dwell_mode != "adaptive")
     r.fail("dwell_mode", "fixed or adaptive");
-  if (c.dwell_mode == "adaptive" && c.bar_noise_mm <= 0)
+  if (c.dwell_mode == "adaptive" && c.bar_noise_mm <= 0 && c.connection_check_mm <= 0)
     r.fail("bar_noise_mm",
-           "required with dwell_mode adaptive: the bar reader's noise (1 sigma, mm), as measured "
-           "with the robot still (docs/settling.md)");
+           "required with dwell_mode adaptive when connection_check_mm is 0 (the connection "
+           "check measures the noise otherwise): the bar reader's noise (1 sigma, mm), as "
+           "measured with the robot still (docs/settling.md)");
   if (c.dwell_mode == "adaptive" && c.adaptive_window_s >= c.settle_s)
     r.fail("adaptive_window_s", "must be below settle_s, or the adaptive dwell never ends early");
   static const std::set<std::string> levels = {"trace", "debug", "info", "warn", "error"};

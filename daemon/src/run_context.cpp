@@ -17,6 +17,14 @@ std::int64_t monotonicMicros(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration_cast<std::chrono::microseconds>(t.time_since_epoch()).count();
 }
 
+// Readings go into window_ while one lives (also when a fault ends the window early: nothing
+// collects while idle).
+struct Collecting {
+  bool& flag;
+  explicit Collecting(bool& f) : flag(f) { flag = true; }
+  ~Collecting() { flag = false; }
+};
+
 std::chrono::steady_clock::duration fromSeconds(double seconds) {
   return std::chrono::duration_cast<std::chrono::steady_clock::duration>(
       std::chrono::duration<double>(seconds));
@@ -210,14 +218,31 @@ void RunContext::spinUntil(Clock::time_point until, bool watch_bar) {
   }
 }
 
-bool RunContext::dwell(Clock::time_point motion_end) {
+std::optional<double> RunContext::measuredNoiseMm() const {
+  // Fewer degrees of freedom than this: the measured noise is too uncertain to judge by.
+  constexpr std::size_t kMinStillDof = 20;
+  if (still_noise_.dof() < kMinStillDof || still_noise_.mm() <= 0) return std::nullopt;
+  return still_noise_.mm();
+}
+
+std::optional<double> RunContext::adaptiveNoiseMm() const {
+  if (config.dwell_mode != "adaptive" || !audit_.trusted()) return std::nullopt;
+  if (config.bar_noise_mm > 0) return config.bar_noise_mm;
+  return measuredNoiseMm();
+}
+
+RunContext::Dwell RunContext::dwell(Clock::time_point motion_end) {
   const auto until = motion_end + fromSeconds(config.settle_s);
-  if (config.dwell_mode != "adaptive") {
+  Dwell d;
+  const std::optional<double> noise = adaptiveNoiseMm();
+  if (!noise) {
     spinUntil(until, true);
-    return false;
+    return d;
   }
+  d.adaptive = true;
+  d.noise_mm = *noise;
   SteadyCriteria criteria;
-  criteria.noise_mm = config.bar_noise_mm;
+  criteria.noise_mm = *noise;
   criteria.window_s = config.adaptive_window_s;
   SteadyWindow steady(criteria);
   struct Feeding {  // also when a fault ends the dwell: no reading is fed to a window gone
@@ -226,14 +251,41 @@ bool RunContext::dwell(Clock::time_point motion_end) {
     ~Feeding() { slot = nullptr; }
   };
   dwell_start_ = motion_end;
-  const Feeding feeding(steady_, steady);
-  for (auto now = Clock::now(); now < until; now = Clock::now()) {
-    checkpoint();
-    io.poll(std::min(until, now + std::chrono::milliseconds(10)));
-    watchBar();
-    if (steady.steady()) return true;
+  {
+    const Feeding feeding(steady_, steady);
+    for (auto now = Clock::now(); now < until && !d.steady; now = Clock::now()) {
+      checkpoint();
+      io.poll(std::min(until, now + std::chrono::milliseconds(10)));
+      watchBar();
+      d.steady = steady.steady();
+    }
   }
-  return false;
+  const long every = config.adaptive_audit_every;
+  if (!d.steady || every <= 0 || steady_dwells_++ % every != 0) {
+    d.ended_early = d.steady;
+    return d;
+  }
+  // Audited: the window the adaptive dwell would have read, then on to settle_s.
+  window_.clear();
+  {
+    const Collecting collect(collecting_);
+    spinUntil(std::min(until, Clock::now() + fromSeconds(config.bar_window_s)), true);
+  }
+  if (!window_.empty()) {
+    d.audited = true;
+    d.audit_readings = window_.size();
+    for (double v : window_) d.audit_mean_mm += v;
+    d.audit_mean_mm /= static_cast<double>(window_.size());
+  }
+  spinUntil(until, true);
+  return d;
+}
+
+DwellAudit::Verdict RunContext::audit(const Dwell& d, const Measurement& m) {
+  // Judged by the noise measured, whatever bar_noise_mm says: a figure set too high must not
+  // blind the audit that is there to catch it.
+  return audit_.add(d.audit_mean_mm, d.audit_readings, m.deflection_mm, m.readings,
+                    measuredNoiseMm().value_or(d.noise_mm));
 }
 
 JointsDeg RunContext::move(const JointsDeg& target, bool bar_attached) {
@@ -298,11 +350,6 @@ RunContext::Followed RunContext::moveWatchingForBar(const JointsDeg& target,
 }
 
 RunContext::Measurement RunContext::measureHere(double window_s) {
-  struct Collecting {  // also when a fault ends the window early: nothing collects while idle
-    bool& flag;
-    explicit Collecting(bool& f) : flag(f) { flag = true; }
-    ~Collecting() { flag = false; }
-  };
   Measurement m;
   // Readings still queued from before the dwell ended (the run thread was late, e.g. on a loaded
   // machine) may be of the arm in motion: delivered now, they stay out of the window.

@@ -7,6 +7,7 @@
 
 #include <robocal/daemon/cell_io.hpp>
 #include <robocal/daemon/config.hpp>
+#include <robocal/daemon/dwell_audit.hpp>
 #include <robocal/daemon/run.hpp>
 #include <robocal/daemon/run_store.hpp>
 #include <robocal/daemon/steady_window.hpp>
@@ -93,8 +94,19 @@ class RunContext {
   void spinUntil(Clock::time_point until, bool watch_bar);
   // The dwell at a data point, from the move's end, watched: settle_s (dwell_mode fixed), or until
   // the bar's readings are steady and never later than settle_s (adaptive; steady_window.hpp).
-  // True when steadiness ended it.
-  bool dwell(Clock::time_point motion_end);
+  // An audited adaptive dwell reads the window it would have ended with, then goes on to
+  // settle_s (dwell_audit.hpp). Without a noise to judge against, or once the audits lost trust
+  // in it, the adaptive dwell is fixed.
+  struct Dwell {
+    bool adaptive = false;     // judged by the readings' steadiness
+    bool steady = false;       // the readings were steady before settle_s
+    bool ended_early = false;  // ... and the dwell ended then (not audited)
+    bool audited = false;      // audit_mean_mm holds the window read when they were steady
+    double noise_mm = 0;       // the noise judged against
+    double audit_mean_mm = 0;
+    std::size_t audit_readings = 0;
+  };
+  Dwell dwell(Clock::time_point motion_end);
   // A joint move watched for stop requests, controller errors and the bar: with the bar attached
   // its limits; believed detached, a reading that changes (the bar is still attached after all).
   JointsDeg move(const JointsDeg& target, bool bar_attached);
@@ -130,6 +142,30 @@ class RunContext {
   Measurement measureHere() { return measureHere(config.bar_window_s); }
   Measurement measureHere(double window_s);
 
+  // ---- the adaptive dwell's safeguards (docs/settling.md)
+  // A window read with the robot still after a full settle_s (the connection check's): it
+  // measures the bar reader's noise. Forgotten at each connection check's start.
+  void noteStillWindow(const Measurement& m) { still_noise_.add(m.noise_mm, m.readings); }
+  void forgetStillNoise() { still_noise_.clear(); }
+  const StillNoise& stillNoise() const { return still_noise_; }
+  // The noise the adaptive dwell judges steadiness against: bar_noise_mm when configured, else
+  // the measured one; nullopt (a fixed dwell) with dwell_mode fixed, before a measurement, or
+  // once the audits lost trust in the adaptive dwell.
+  std::optional<double> adaptiveNoiseMm() const;
+  // The noise measured since the last connection check began (nullopt: too few readings yet).
+  std::optional<double> measuredNoiseMm() const;
+  // An audited dwell's window against the fixed dwell's measurement `m` that followed it, judged
+  // by the measured noise (bar_noise_mm when none is measured).
+  DwellAudit::Verdict audit(const Dwell& d, const Measurement& m);
+  bool adaptiveTrusted() const { return audit_.trusted(); }
+  // A run starts or resumes: no noise measured yet (the next connection check measures it), the
+  // audits afresh (the first steady dwell audited).
+  void resetAdaptiveDwell() {
+    still_noise_.clear();
+    audit_ = DwellAudit{};
+    steady_dwells_ = 0;
+  }
+
   // ---- the operator
   // Publishes the PROMPT and waits for the operator's confirm; `on_nudge` (when given) carries out
   // nudge requests meanwhile.
@@ -164,6 +200,9 @@ class RunContext {
   std::vector<double> window_;  // readings collected while averaging
   bool collecting_ = false;
   SteadyWindow* steady_ = nullptr;  // fed the readings during an adaptive dwell
+  StillNoise still_noise_;
+  DwellAudit audit_;
+  long steady_dwells_ = 0;  // adaptive dwells whose readings were steady: every Nth is audited
   Clock::time_point dwell_start_{};
   double bar_offset_mm_ = 0;
   std::map<std::string, long> link_faults_reported_;

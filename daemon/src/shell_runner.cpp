@@ -3,6 +3,7 @@
 #include <robocal/daemon/connection_check.hpp>
 #include <robocal/planner/check.hpp>
 
+#include <spdlog/spdlog.h>
 #include <Eigen/Geometry>
 
 #include <algorithm>
@@ -40,7 +41,8 @@ struct PointTiming {
   static double msBetween(Clock::time_point from, Clock::time_point to) {
     return toMicrosecond(std::chrono::duration<double, std::milli>(to - from).count());
   }
-  // `dwell_mode` as configured; `steady`: an adaptive dwell ended by steady readings before
+  // `dwell_mode` as this point's dwell was (an adaptive dwell is fixed without a noise to judge
+  // by or once its audits failed); `steady`: an adaptive dwell ended by steady readings before
   // settle_s (settle_error_ms is then negative: the time saved).
   json toEvent(int shell, double lat_deg, double lon_deg, double settle_s,
                const std::string& dwell_mode, bool steady) const {
@@ -86,6 +88,7 @@ ShellRunner::ShellRunner(RunContext& ctx, FitJob& fits, RunDir& dir, const Plan&
     for (const auto& st : sh.steps) total_points_ += st.kind == StepKind::kPoint;
   while (std::filesystem::exists(dir_.file("replans/" + std::to_string(replans_ + 1) + ".json")))
     ++replans_;
+  ctx_.resetAdaptiveDwell();  // what a run measured of the bar's noise does not carry to the next
 }
 
 // ------------------------------------------------------------------------ book-keeping
@@ -298,9 +301,14 @@ void ShellRunner::verifyConnection(const ShellPlan& shell, JointsDeg& q) {
   if (step_mm <= 0) return;
   // Averaged over at least half a second: the steps are tenths of a millimetre, the noise of
   // one reading a few hundredths.
+  // Read with the robot still after a full settle_s, these windows also measure the bar's noise
+  // for the adaptive dwell (afresh at each connection: the bar is seated anew).
+  ctx_.forgetStillNoise();
   const auto settledMeasurement = [&] {
     ctx_.spin(config.settle_s, true);
-    return ctx_.measureHere(std::max(config.bar_window_s, 0.5));
+    const RunContext::Measurement m = ctx_.measureHere(std::max(config.bar_window_s, 0.5));
+    ctx_.noteStillWindow(m);
+    return m;
   };
   const JointsDeg start = q;
   // Every pose the check reads is reached up in every joint from a pre-point (kCheckApproachDeg),
@@ -391,6 +399,7 @@ void ShellRunner::verifyConnection(const ShellPlan& shell, JointsDeg& q) {
                     {"shell", shell.shell},
                     {"connection", connectionName(shell.connection)},
                     {"steps", record},
+                    {"still_noise_mm", ctx_.stillNoise().mm()},
                     {"ok", problem.empty()}});
   if (!problem.empty())
     throw StopRun{StopRun::kFault,
@@ -487,8 +496,9 @@ JointsDeg ShellRunner::recordPoint(const ShellPlan& planned, const PlanStep& ste
   const DaemonConfig& config = ctx_.config;
   PointTiming timing;
   const auto motion_end = timing.motion_complete = Clock::now();
-  const bool steady = ctx_.dwell(motion_end);
+  const RunContext::Dwell dwell = ctx_.dwell(motion_end);
   const RunContext::Measurement m = ctx_.measureHere();
+  if (dwell.audited) auditDwell(planned, step, dwell, m);
   const double dwell_s = std::chrono::duration<double>(m.bar_window_start - motion_end).count();
   Sample s = shellSample(planned, m);
   s.lat_deg = step.lat_deg;
@@ -500,8 +510,8 @@ JointsDeg ShellRunner::recordPoint(const ShellPlan& planned, const PlanStep& ste
   timing.sample_on_disk = Clock::now();
   timing.bar_window_start = m.bar_window_start;
   timing.where_end = m.where_end;
-  dir_.logEvent(
-      timing.toEvent(s.shell, s.lat_deg, s.lon_deg, config.settle_s, config.dwell_mode, steady));
+  dir_.logEvent(timing.toEvent(s.shell, s.lat_deg, s.lon_deg, config.settle_s,
+                               dwell.adaptive ? "adaptive" : "fixed", dwell.ended_early));
   ctx_.reportLinkFaults(dir_);
   samples_.push_back(s);
   centring_.add(s);
@@ -526,6 +536,30 @@ JointsDeg ShellRunner::recordPoint(const ShellPlan& planned, const PlanStep& ste
                                        std::to_string(c.chuck_index + 1) + ", then resume"};
   }
   return m.joints_deg;
+}
+
+void ShellRunner::auditDwell(const ShellPlan& planned, const PlanStep& step,
+                             const RunContext::Dwell& dwell, const RunContext::Measurement& m) {
+  const DwellAudit::Verdict v = ctx_.audit(dwell, m);
+  ctx_.event(dir_, {{"event", "dwell_audit"},
+                    {"shell", planned.shell},
+                    {"lat_deg", step.lat_deg},
+                    {"lon_deg", step.lon_deg},
+                    {"adaptive_mm", dwell.audit_mean_mm},
+                    {"fixed_mm", m.deflection_mm},
+                    {"difference_mm", v.difference_mm},
+                    {"sigma_mm", v.sigma_mm},
+                    {"noise_mm", dwell.noise_mm},
+                    {"measured_noise_mm", ctx_.measuredNoiseMm().value_or(0)},
+                    {"passed", v.passed}});
+  if (v.passed || ctx_.adaptiveTrusted()) return;
+  char why[200];
+  std::snprintf(why, sizeof why,
+                "the adaptive dwell's reading differed from the full dwell's by %+.4f mm (%.1f "
+                "sigma) again: the rest of the run dwells settle_s at every point",
+                v.difference_mm, v.sigma_mm > 0 ? v.difference_mm / v.sigma_mm : 0.0);
+  spdlog::warn("shell {}: {}", planned.shell, why);
+  ctx_.event(dir_, {{"event", "adaptive_dwell_off"}, {"shell", planned.shell}, {"reason", why}});
 }
 
 void ShellRunner::completeSet(std::size_t shell_index, bool only_unfitted) {

@@ -52,6 +52,10 @@ class ShellRunner {
   // Dwells, measures and records a data point (on disk before the robot moves again); the actual
   // joints. StopRun when the shell's connection looks bad (ShellWatch).
   JointsDeg recordPoint(const ShellPlan& planned, const PlanStep& step, double point_planned_s);
+  // An audited dwell's two readings compared (docs/settling.md), as a "dwell_audit" event; a
+  // second failed audit turns the adaptive dwell off for the run.
+  void auditDwell(const ShellPlan& planned, const PlanStep& step, const RunContext::Dwell& dwell,
+                  const RunContext::Measurement& m);
   // Fits the shell set that `shell` completes, if it completes one; `only_unfitted`: only when
   // the set has no result in the run folder yet (a set measured before a kill cut its fit short).
   void completeSet(std::size_t shell_index, bool only_unfitted = false);

@@ -6,6 +6,7 @@
 #include "../../sim/cellsim/settling.hpp"
 
 #include <robocal/daemon/config.hpp>
+#include <robocal/daemon/dwell_audit.hpp>
 #include <robocal/daemon/steady_window.hpp>
 
 #include <nlohmann/json.hpp>
@@ -14,6 +15,7 @@
 #include <cmath>
 #include <optional>
 #include <random>
+#include <vector>
 
 using namespace robocal::daemon;
 using robocal::cellsim::SettlingModel;
@@ -150,8 +152,14 @@ TEST_CASE("config: the adaptive dwell's keys are checked by name", "[settling]")
   CHECK(configError({{"dwell_mode", "adaptive"}, {"bar_noise_mm", 0.002}}).empty());
   CHECK_THAT(configError({{"dwell_mode", "quick"}}),
              Catch::Contains("robocald.json: dwell_mode: fixed or adaptive"));
-  CHECK_THAT(configError({{"dwell_mode", "adaptive"}}),
-             Catch::Contains("bar_noise_mm: required with dwell_mode adaptive"));
+  // Without bar_noise_mm the connection check measures the noise; without the check, nothing does.
+  CHECK(configError({{"dwell_mode", "adaptive"}}).empty());
+  CHECK_THAT(configError({{"dwell_mode", "adaptive"}, {"connection_check_mm", 0}}),
+             Catch::Contains("bar_noise_mm: required with dwell_mode adaptive when "
+                             "connection_check_mm is 0"));
+  CHECK_THAT(configError({{"adaptive_audit_every", -1}}),
+             Catch::Contains("adaptive_audit_every: must be"));
+  CHECK_THAT(configError({{"adaptive_audit_every", 2.5}}), Catch::Contains("adaptive_audit_every"));
   CHECK_THAT(configError({{"bar_noise_mm", -1}}), Catch::Contains("bar_noise_mm: must be"));
   CHECK_THAT(configError({{"dwell_mode", "adaptive"},
                           {"bar_noise_mm", 0.002},
@@ -161,4 +169,73 @@ TEST_CASE("config: the adaptive dwell's keys are checked by name", "[settling]")
   CHECK_THAT(configError({{"adaptive_window_s", "long"}}), Catch::Contains("adaptive_window_s:"));
   // A fixed dwell ignores the adaptive keys' relation to settle_s.
   CHECK(configError({{"settle_s", 0.02}}).empty());
+}
+
+TEST_CASE("still noise: the pooled standard deviation of windows read with the robot still",
+          "[settling]") {
+  StillNoise n;
+  CHECK(n.mm() == 0);
+  n.add(0.5, 1);  // one reading: no spread to pool
+  CHECK(n.dof() == 0);
+  n.add(0.002, 11);  // 10 degrees of freedom at 2 um
+  n.add(0.004, 31);  // 30 at 4 um: pooled sqrt((10 x 4 + 30 x 16) / 40)
+  CHECK(n.dof() == 40);
+  CHECK(n.mm() == Approx(std::sqrt((10 * 4.0 + 30 * 16.0) / 40) * 1e-3));
+  n.clear();
+  CHECK(n.dof() == 0);
+  CHECK(n.mm() == 0);
+  // From real windows: the pooled figure recovers the noise the readings were drawn with.
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0, 0.003);
+  for (int w = 0; w < 7; ++w) {
+    std::vector<double> v(25);
+    double mean = 0, squares = 0;
+    for (double& x : v) mean += (x = 0.1 * w + noise(rng)) / 25;
+    for (double x : v) squares += (x - mean) * (x - mean);
+    n.add(std::sqrt(squares / 24), 25);
+  }
+  CHECK(n.mm() == Approx(0.003).epsilon(0.15));
+}
+
+TEST_CASE("dwell audit: a difference the noise explains passes, a bias fails, twice ends trust",
+          "[settling]") {
+  DwellAudit a;  // 4 sigma, one failure allowed
+  // 10 readings each at 3 um: sigma of the difference 3 um x sqrt(0.2) = 1.34 um.
+  DwellAudit::Verdict v = a.add(0.1040, 10, 0.1000, 10, 0.003);
+  CHECK(v.sigma_mm == Approx(0.003 * std::sqrt(0.2)));
+  CHECK(v.difference_mm == Approx(0.004));
+  CHECK(v.passed);  // 3 sigma
+  CHECK(a.trusted());
+  v = a.add(0.1000, 10, 0.1080, 10, 0.003);  // -6 sigma
+  CHECK_FALSE(v.passed);
+  CHECK(a.trusted());  // one failure is allowed: four sigma happens in long runs
+  CHECK(a.add(0.1, 10, 0.1, 10, 0.003).passed);
+  CHECK(a.trusted());
+  CHECK_FALSE(a.add(0.12, 10, 0.1, 10, 0.003).passed);
+  CHECK_FALSE(a.trusted());
+  CHECK(a.audits() == 4);
+  CHECK(a.failures() == 2);
+  // Unbiased windows of pure noise pass at about the normal rate (4 sigma: 6 in 100,000).
+  DwellAudit b;
+  std::mt19937 rng(11);
+  std::normal_distribution<double> noise(0, 0.002);
+  int failed = 0;
+  for (int k = 0; k < 2000; ++k) {
+    double ma = 0, mf = 0;
+    for (int i = 0; i < 12; ++i) ma += noise(rng) / 12;
+    for (int i = 0; i < 25; ++i) mf += noise(rng) / 25;
+    failed += !b.add(ma, 12, mf, 25, 0.002).passed;
+  }
+  CHECK(failed <= 1);
+}
+
+TEST_CASE("config: the shipped robocald.json dwells adaptively, its noise measured and audited",
+          "[settling]") {
+  const DaemonConfig c = loadDaemonConfig(ROBOCAL_SOURCE_DIR "/config/robocald.json");
+  CHECK(c.dwell_mode == "adaptive");
+  CHECK(c.bar_noise_mm == 0);         // measured by each connection check...
+  CHECK(c.connection_check_mm > 0);   // ... which is on
+  CHECK(c.adaptive_audit_every > 0);  // and audited
+  CHECK(c.adaptive_window_s < c.settle_s);
+  CHECK(c.settle_s == 2.0);  // the method's bound
 }

@@ -27,11 +27,16 @@ struct DaemonConfig {
   double settle_s = 2.0;                       // dwell at each data point before recording
   double bar_window_s = 0.2;                   // bar readings averaged after the dwell
   // The dwell (docs/settling.md): "fixed" waits settle_s; "adaptive" ends it as soon as the bar's
-  // readings over the last adaptive_window_s are steady (trend and spread at bar_noise_mm), and
-  // never later than settle_s.
+  // readings over the last adaptive_window_s are steady (trend and spread at the bar's noise),
+  // and never later than settle_s.
   std::string dwell_mode = "fixed";
   double adaptive_window_s = 0.5;
-  double bar_noise_mm = 0;  // the bar reader's noise, 1 sigma; required for the adaptive dwell
+  // The bar reader's noise, 1 sigma; 0: measured by each connection check (its windows, read
+  // with the robot still after settle_s).
+  double bar_noise_mm = 0;
+  // Every Nth adaptive dwell whose readings were steady goes on to settle_s, and the two readings
+  // are compared (the first is audited too); 0: none. A second failed audit: fixed dwell.
+  int adaptive_audit_every = 10;
   double bar_soft_limit_mm = 1.0;  // |deflection| past this during a move: stop and re-centre
   double bar_hard_limit_mm = 1.8;  // past this: stop the robot and pause the run
   bool centering = true;           // refine the model and re-plan while a shell runs

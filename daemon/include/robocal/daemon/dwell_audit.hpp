@@ -1,0 +1,60 @@
+// The adaptive dwell's two safeguards, without I/O (docs/settling.md):
+// - StillNoise: the bar reader's noise measured on this cell, now: the pooled standard deviation
+//   of the windows read with the robot still after a full settle_s (the connection check's), so
+//   that the adaptive dwell judges "steady" against the noise the bar really has, not a figure
+//   typed into a config file.
+// - DwellAudit: now and then a point dwells the full settle_s although its readings looked steady
+//   earlier; the reading the adaptive dwell would have taken (the window right after it judged
+//   steady) is compared with the fixed dwell's. A difference beyond what the noise explains is a
+//   bias of the adaptive dwell on this cell (a ring slower than its window, a noise figure set too
+//   high): after `failures_allowed` of them the run keeps the fixed dwell.
+// Deterministic: the same figures give the same answers.
+#pragma once
+
+#include <cstddef>
+
+namespace robocal::daemon {
+
+class StillNoise {
+ public:
+  // One window of `readings` readings with standard deviation `stddev_mm` about their mean.
+  void add(double stddev_mm, std::size_t readings);
+  void clear() { *this = StillNoise{}; }
+  // Degrees of freedom pooled (readings minus one per window).
+  std::size_t dof() const { return dof_; }
+  // The pooled standard deviation (0 before any window of two readings or more).
+  double mm() const;
+
+ private:
+  double squares_ = 0;
+  std::size_t dof_ = 0;
+};
+
+class DwellAudit {
+ public:
+  struct Criteria {
+    double z = 4;              // a difference beyond z sigma fails the audit
+    int failures_allowed = 1;  // the adaptive dwell is kept up to this many failed audits
+  };
+  struct Verdict {
+    double difference_mm = 0;  // adaptive window's mean - fixed window's mean
+    double sigma_mm = 0;       // the difference's standard deviation with no bias
+    bool passed = true;
+  };
+  DwellAudit() = default;
+  explicit DwellAudit(const Criteria& c) : c_(c) {}
+
+  // One audited point: each window's mean and number of readings, and the reader's noise.
+  Verdict add(double adaptive_mean_mm, std::size_t adaptive_readings, double fixed_mean_mm,
+              std::size_t fixed_readings, double noise_mm);
+  // The adaptive dwell still trusted (no more failed audits than allowed).
+  bool trusted() const { return failures_ <= c_.failures_allowed; }
+  int audits() const { return audits_; }
+  int failures() const { return failures_; }
+
+ private:
+  Criteria c_;
+  int audits_ = 0, failures_ = 0;
+};
+
+}  // namespace robocal::daemon
