@@ -389,6 +389,9 @@ int watch(const std::vector<std::string>& argv) {
       if (e.event == "connection_check" && !e.details.value("ok", true))
         say("connection check failed on shell " + std::to_string(e.details.value("shell", 0)) +
             "\n");
+      if (e.event == "adaptive_dwell_off")
+        say("shell " + std::to_string(e.details.value("shell", 0)) + ": " +
+            e.details.value("reason", std::string()) + "\n");
     }
     drawLive(true);
     if (reached && until.count(proto::runStateName(*reached))) {

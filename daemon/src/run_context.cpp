@@ -231,10 +231,11 @@ std::optional<double> RunContext::adaptiveNoiseMm() const {
   return measuredNoiseMm();
 }
 
-RunContext::Dwell RunContext::dwell(Clock::time_point motion_end) {
+RunContext::Dwell RunContext::dwell(Clock::time_point motion_end, bool adaptive_allowed) {
   const auto until = motion_end + fromSeconds(config.settle_s);
   Dwell d;
-  const std::optional<double> noise = adaptiveNoiseMm();
+  const std::optional<double> noise =
+      adaptive_allowed ? adaptiveNoiseMm() : std::optional<double>{};
   if (!noise) {
     spinUntil(until, true);
     return d;
@@ -260,12 +261,18 @@ RunContext::Dwell RunContext::dwell(Clock::time_point motion_end) {
       d.steady = steady.steady();
     }
   }
+  // An audit compares a whole window with the fixed dwell's: steady too late for one, the dwell
+  // ends (it saved little) and the audit waits for the next steady dwell.
   const long every = config.adaptive_audit_every;
-  if (!d.steady || every <= 0 || steady_dwells_++ % every != 0) {
+  const bool room = Clock::now() + fromSeconds(config.bar_window_s) <= until;
+  if (!d.steady || every <= 0 || !room || steady_dwells_++ % every != 0) {
     d.ended_early = d.steady;
     return d;
   }
-  // Audited: the window the adaptive dwell would have read, then on to settle_s.
+  // Audited: the window the adaptive dwell would have read (what is queued delivered first, as
+  // measureHere does), then on to settle_s.
+  io.poll(Clock::now());
+  watchBar();
   window_.clear();
   {
     const Collecting collect(collecting_);

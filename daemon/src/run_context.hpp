@@ -96,7 +96,7 @@ class RunContext {
   // the bar's readings are steady and never later than settle_s (adaptive; steady_window.hpp).
   // An audited adaptive dwell reads the window it would have ended with, then goes on to
   // settle_s (dwell_audit.hpp). Without a noise to judge against, or once the audits lost trust
-  // in it, the adaptive dwell is fixed.
+  // in it, or where the adaptive dwell is not allowed (an ISO test's points), the dwell is fixed.
   struct Dwell {
     bool adaptive = false;     // judged by the readings' steadiness
     bool steady = false;       // the readings were steady before settle_s
@@ -106,7 +106,7 @@ class RunContext {
     double audit_mean_mm = 0;
     std::size_t audit_readings = 0;
   };
-  Dwell dwell(Clock::time_point motion_end);
+  Dwell dwell(Clock::time_point motion_end, bool adaptive_allowed);
   // A joint move watched for stop requests, controller errors and the bar: with the bar attached
   // its limits; believed detached, a reading that changes (the bar is still attached after all).
   JointsDeg move(const JointsDeg& target, bool bar_attached);

@@ -496,7 +496,8 @@ JointsDeg ShellRunner::recordPoint(const ShellPlan& planned, const PlanStep& ste
   const DaemonConfig& config = ctx_.config;
   PointTiming timing;
   const auto motion_end = timing.motion_complete = Clock::now();
-  const RunContext::Dwell dwell = ctx_.dwell(motion_end);
+  // An ISO 9283-style test reads every pose after the full dwell, as the standard's "settled".
+  const RunContext::Dwell dwell = ctx_.dwell(motion_end, plan_.purpose != PlanPurpose::kIsoTest);
   const RunContext::Measurement m = ctx_.measureHere();
   if (dwell.audited) auditDwell(planned, step, dwell, m);
   const double dwell_s = std::chrono::duration<double>(m.bar_window_start - motion_end).count();

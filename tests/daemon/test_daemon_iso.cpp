@@ -11,6 +11,8 @@
 #include <robocal/formats/error.hpp>
 
 #include <filesystem>
+#include <sstream>
+#include <string>
 
 using namespace robocal;
 using namespace robocal::test;
@@ -18,7 +20,10 @@ using json = nlohmann::json;
 
 TEST_CASE("an ISO 9283-style test runs in cellsim and reports its figures with 95 % intervals",
           "[e2e][iso]") {
-  Cell cell({"B1C1"}, 31, true, 60, 50, json::object(), {"--realism", "typical"});
+  // The adaptive dwell configured: an ISO test's poses still get the full dwell (below).
+  const json adaptive = {
+      {"dwell_mode", "adaptive"}, {"adaptive_window_s", 0.01}, {"bar_noise_mm", 0.05}};
+  Cell cell({"B1C1"}, 31, true, 60, 50, adaptive, {"--realism", "typical"});
   const std::string plan = cell.dir / "iso.json";
   const auto planned =
       runRobocal("iso-plan --model " + kModel + " --cell " + (cell.dir / "cell.json") +
@@ -62,6 +67,17 @@ TEST_CASE("an ISO 9283-style test runs in cellsim and reports its figures with 9
   CHECK(report["limits"].size() >= 3);
   CHECK(readTextFile(run + "/iso9283.txt").find("What a ball-bar cannot give") !=
         std::string::npos);
+
+  // Every pose was read after the full dwell, as the standard's "settled".
+  int timed = 0;
+  std::istringstream events(readTextFile(run + "/events.jsonl"));
+  for (std::string line; std::getline(events, line);) {
+    const json e = json::parse(line);
+    if (e["event"] != "timing") continue;
+    ++timed;
+    CHECK(e["dwell_mode"] == "fixed");
+  }
+  CHECK(timed > 0);
 
   // Offline, the same samples and plan give the same figures.
   const auto offline = runRobocal("iso-report --model " + kModel + " " + run + "/samples.csv" +
