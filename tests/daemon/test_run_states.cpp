@@ -14,6 +14,7 @@
 #include <cmath>
 #include <condition_variable>
 #include <fstream>
+#include <functional>
 #include <mutex>
 #include <optional>
 #include <set>
@@ -30,8 +31,9 @@ class Harness {
   std::function<bool(const json& prompt)> at_prompt = [](const json&) { return true; };
 
   Harness(const std::vector<std::string>& connections, const std::vector<double>& extensions_mm,
-          double truth_error_mm = 0)
-      : nominal_(loadModelFile(ROBOCAL_SOURCE_DIR "/config/puma560.json")),
+          double truth_error_mm = 0, std::function<void(daemon::DaemonConfig&)> configure = {})
+      : configure_(std::move(configure)),
+        nominal_(loadModelFile(ROBOCAL_SOURCE_DIR "/config/puma560.json")),
         cell_(cellFromJson(smallCell(connections, extensions_mm, 90))),
         plan_(planCell(nominal_, cell_)) {
     ParamVector p = toParams(nominal_);
@@ -112,6 +114,7 @@ class Harness {
     config.bar_window_s = 0.02;
     config.connection_check_mm = 0;  // its half-second windows are tested on their own
     config.drivers.bar.stale_after_s = 0.1;
+    if (configure_) configure_(config);
     run_ = std::make_unique<daemon::RunController>(
         config, nominal_, cell_, [this](json o, bool droppable) { published(o, droppable); },
         std::move(io));
@@ -132,6 +135,7 @@ class Harness {
     changed_.notify_all();
   }
 
+  std::function<void(daemon::DaemonConfig&)> configure_;
   TempDir dir_;
   Model nominal_;
   CellConfig cell_;
@@ -183,6 +187,64 @@ TEST_CASE("run states: a whole run, the bar detached at the end, then a second r
   REQUIRE(again.size() == 8);
   CHECK(again[4]["action"] == "connect");
   CHECK(h.run().runs()["runs"].size() == 2);
+  CHECK(h.problems().empty());
+}
+
+TEST_CASE("run states: each run audits its first steady dwell, a second run too",
+          "[daemon][states][settling]") {
+  // The adaptive dwell on the scripted (noiseless) bar, its noise configured: every dwell is
+  // steady. One audit a run's worth of points: the audits' count starts afresh with each run,
+  // so each run's first point is audited (counted on from the first run, the second run's
+  // would not be).
+  int points = 0;
+  const auto adaptive = [&points](daemon::DaemonConfig& c) {
+    c.settle_s = 0.3;
+    c.dwell_mode = "adaptive";
+    c.adaptive_window_s = 0.05;
+    c.bar_noise_mm = 0.01;
+    c.adaptive_audit_every = points + 1;
+  };
+  {
+    Harness probe({"B1C1"}, {0});
+    points = probe.points();
+  }
+  REQUIRE(points >= 2);
+  Harness h({"B1C1"}, {0}, 0, adaptive);
+  for (int run = 1; run <= 2; ++run) {
+    INFO("run " << run);
+    REQUIRE(h.run().start(h.plan()).empty());
+    REQUIRE(h.waitState({"done", "paused", "error", "aborted"}) == "done");
+    const auto audits = h.events("dwell_audit");
+    const auto samples = h.seen("SAMPLE");
+    REQUIRE(samples.size() == static_cast<std::size_t>(run * points));
+    REQUIRE(audits.size() == static_cast<std::size_t>(run));
+    const json& first = samples[static_cast<std::size_t>((run - 1) * points)];
+    CHECK(audits.back()["lat_deg"] == first["lat_deg"]);
+    CHECK(audits.back()["lon_deg"] == first["lon_deg"]);
+    CHECK(audits.back()["passed"] == true);  // a noiseless bar at rest reads the same
+    CHECK(audits.back()["difference_mm"].get<double>() == Approx(0).margin(1e-9));
+  }
+  CHECK(h.events("adaptive_dwell_off").empty());
+  // The steady dwells not audited ended well before settle_s: the SAMPLEs say how long.
+  int short_dwells = 0;
+  for (const json& s : h.seen("SAMPLE")) short_dwells += s["dwell_s"].get<double>() < 0.2;
+  CHECK(short_dwells >= 2 * points - 2 - 2);  // all but the two audited, bar a late thread or two
+  CHECK(h.problems().empty());
+}
+
+TEST_CASE("run states: with adaptive_audit_every 0 no dwell is audited",
+          "[daemon][states][settling]") {
+  Harness h({"B1C1"}, {0}, 0, [](daemon::DaemonConfig& c) {
+    c.settle_s = 0.3;
+    c.dwell_mode = "adaptive";
+    c.adaptive_window_s = 0.05;
+    c.bar_noise_mm = 0.01;
+    c.adaptive_audit_every = 0;
+  });
+  REQUIRE(h.run().start(h.plan()).empty());
+  REQUIRE(h.waitState({"done", "paused", "error", "aborted"}) == "done");
+  CHECK(h.seen("SAMPLE").size() == static_cast<std::size_t>(h.points()));
+  CHECK(h.events("dwell_audit").empty());
   CHECK(h.problems().empty());
 }
 
