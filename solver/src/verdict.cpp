@@ -89,6 +89,18 @@ std::vector<std::string> fitProblems(const FitAssessment& a, const VerdictLimits
                   number("%.3g", limits.max_fit_rms_mm) +
                   " mm): the model does not describe these data; check the units, the "
                   "connection labels (which ball on which chuck) and the model file");
+  const Adequacy& ad = a.adequacy;
+  if (ad.noise_mm && ad.lack_of_fit && ad.fit_over_noise > limits.max_fit_over_noise)
+    out.push_back("the fit's residual, " + number("%.3g", ad.sigma_mm) + " mm, is " +
+                  number("%.2g", ad.fit_over_noise) + " times the bar's noise that " +
+                  std::to_string(ad.revisited_places) + " revisited places measured (" +
+                  number("%.3g", *ad.noise_mm) + " mm; at most " +
+                  number("%.2g", limits.max_fit_over_noise) +
+                  " times): " + number("%.2g", ad.unmodelled_bar_mm()) +
+                  " mm of error along the bar that the model does not contain, which every "
+                  "compensated position would carry; check the balls' and chucks' positions "
+                  "and the bar's extension in the model file, a loose ball or chuck, and the "
+                  "settling (docs/real-cell.md), then measure again");
   if (!a.outliers.empty() && !a.outliers_dropped) {
     const auto worst = std::max_element(a.outliers.begin(), a.outliers.end(),
                                         [](const FlaggedOutlier& x, const FlaggedOutlier& y) {

@@ -172,4 +172,20 @@ TEST_CASE(
   CHECK(worse.adequacy.unmodelled_bar_mm() < 0.1);
   CHECK(plain.adequacy.unmodelled_bar_mm() == 0);
   CHECK_THAT(worse.adequacy.summary(), Catch::Contains("x the bar's noise measured by 90"));
+  // Far above the noise the revisits measured (1.5 times): not usable, with the reason and the fix.
+  INFO(worse.adequacy.fit_over_noise);
+  CHECK(worse.adequacy.fit_over_noise > 1.5);
+  const auto refused = [](const FitAssessment& a) {
+    for (const std::string& p : a.problems)
+      if (p.find("revisited places measured") != std::string::npos) return true;
+    return false;
+  };
+  CHECK(refused(worse));
+  CHECK_FALSE(refused(plain));
+  CHECK(plain.problems.empty());
+  // The limit is the verdict's: raised past the ratio, the same fit is not refused for it.
+  VerdictLimits lenient;
+  lenient.max_fit_over_noise = worse.adequacy.fit_over_noise + 0.1;
+  for (const std::string& p : fitProblems(worse, lenient))
+    CHECK(p.find("revisited places measured") == std::string::npos);
 }

@@ -34,6 +34,10 @@ struct VerdictLimits {
   // Samples per identified parameter at least: with fewer, the residuals cannot show the fit's
   // own error (n - rank degrees of freedom against rank parameters).
   double min_samples_per_parameter = 2.0;
+  // The fit's residual standard error at most this many times the bar's noise that revisits
+  // measured (when there are revisits and the excess is beyond chance, Adequacy::lack_of_fit):
+  // at 1.5 the error the model does not contain is already larger than the noise.
+  double max_fit_over_noise = 1.5;
 };
 
 // The units the samples seem to be written in, when they are not the files' (degrees, mm): a
