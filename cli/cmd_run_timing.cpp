@@ -22,11 +22,62 @@ constexpr const char* kHelp = R"(usage: robocal run-timing RUN_DIR [--json]
 Summarises the dwell timing robocald logged for each data point of a run (RUN_DIR/events.jsonl,
 "timing" events): the achieved settle time (motion complete to the bar window's start) against
 the configured settle_s, the controller's WHERE within the window, and the time from motion
-complete to the sample fsynced on disk. Prints min, p50, p99 and max of each (ms). Exits 1 when
-the run has no timing events.
+complete to the sample fsynced on disk. Prints min, p50, p99 and max of each (ms), and how the
+points dwelt: adaptive or fixed, ended early by steady readings, the adaptive dwell's audits and
+whether they turned it off, and the bar's noise each connection check measured
+(docs/settling.md). Exits 1 when the run has no timing events.
 
   --json    one JSON object instead of the table
 )";
+
+// How the points dwelt (docs/settling.md), from the timing, dwell_audit, adaptive_dwell_off and
+// connection_check events.
+struct DwellSummary {
+  int adaptive = 0, fixed = 0, ended_early = 0, audits = 0, audits_failed = 0;
+  std::vector<std::string> turned_off;  // the reasons, one a turning off
+  std::vector<double> still_noise_mm;   // one a connection check
+
+  void add(const json& ev) {
+    const std::string name = ev.value("event", "");
+    // Every field read before anything is counted: a damaged event counts nowhere.
+    if (name == "timing") {
+      const bool is_adaptive = ev.value("dwell_mode", "fixed") == "adaptive";
+      const bool steady = ev.value("steady", false);
+      (is_adaptive ? adaptive : fixed) += 1;
+      ended_early += steady;
+    } else if (name == "dwell_audit") {
+      const bool passed = ev.value("passed", true);
+      ++audits;
+      audits_failed += !passed;
+    } else if (name == "adaptive_dwell_off") {
+      turned_off.push_back(ev.value("reason", ""));
+    } else if (name == "connection_check" && ev.contains("still_noise_mm")) {
+      still_noise_mm.push_back(ev.value("still_noise_mm", 0.0));
+    }
+  }
+  json toJson() const {
+    return {{"adaptive", adaptive},
+            {"fixed", fixed},
+            {"ended_early", ended_early},
+            {"audits", audits},
+            {"audits_failed", audits_failed},
+            {"turned_off", turned_off},
+            {"still_noise_mm", still_noise_mm}};
+  }
+  void print() const {
+    std::printf(
+        "dwell: %d adaptive (%d ended early by steady readings), %d fixed; %d audit%s, %d "
+        "failed\n",
+        adaptive, ended_early, fixed, audits, audits == 1 ? "" : "s", audits_failed);
+    if (!still_noise_mm.empty()) {
+      std::printf("bar noise measured by the connection checks (mm):");
+      for (double n : still_noise_mm) std::printf(" %.5f", n);
+      std::printf("\n");
+    }
+    for (const std::string& why : turned_off)
+      std::printf("the adaptive dwell was turned off: %s\n", why.c_str());
+  }
+};
 
 // Nearest-rank percentile of sorted values.
 double percentile(const std::vector<double>& sorted, double p) {
@@ -49,6 +100,7 @@ int run(const std::vector<std::string>& argv) {
                                           "motion_to_disk_ms"};
   std::map<std::string, std::vector<double>> values_ms;
   std::map<double, int> settle_s_seen;
+  DwellSummary dwell;
   int line_number = 0;
   for (std::string line; std::getline(in, line);) {
     ++line_number;
@@ -58,6 +110,12 @@ int run(const std::vector<std::string>& argv) {
       ev = json::parse(line);
     } catch (const json::exception&) {
       std::fprintf(stderr, "%s:%d: not JSON, skipped\n", path.c_str(), line_number);
+      continue;
+    }
+    try {
+      dwell.add(ev);
+    } catch (const json::exception& e) {
+      std::fprintf(stderr, "%s:%d: %s, skipped\n", path.c_str(), line_number, e.what());
       continue;
     }
     if (ev.value("event", "") != "timing") continue;
@@ -75,6 +133,7 @@ int run(const std::vector<std::string>& argv) {
   json settles = json::array();
   for (const auto& [s, n] : settle_s_seen) settles.push_back({{"settle_s", s}, {"points", n}});
   out["settle_s"] = settles;
+  out["dwell"] = dwell.toJson();
   for (const auto& n : names) {
     std::vector<double> v = values_ms[n];
     std::sort(v.begin(), v.end());
@@ -97,6 +156,7 @@ int run(const std::vector<std::string>& argv) {
                 out[n]["p50"].get<double>(), out[n]["p99"].get<double>(),
                 out[n]["max"].get<double>());
   }
+  dwell.print();
   return 0;
 }
 
