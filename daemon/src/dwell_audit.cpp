@@ -1,5 +1,6 @@
 #include <robocal/daemon/dwell_audit.hpp>
 
+#include <algorithm>
 #include <cmath>
 
 namespace robocal::daemon {
@@ -19,9 +20,11 @@ DwellAudit::Verdict DwellAudit::add(double adaptive_mean_mm, std::size_t adaptiv
                                     double noise_mm) {
   Verdict v;
   v.difference_mm = adaptive_mean_mm - fixed_mean_mm;
-  const auto inverse = [](std::size_t n) { return n == 0 ? 1.0 : 1.0 / static_cast<double>(n); };
+  const auto inverse = [](std::size_t n) {
+    return 1.0 / static_cast<double>(std::max<std::size_t>(n, 1));
+  };
   v.sigma_mm = noise_mm * std::sqrt(inverse(adaptive_readings) + inverse(fixed_readings));
-  v.passed = std::abs(v.difference_mm) <= c_.z * v.sigma_mm;
+  v.passed = std::abs(v.difference_mm) <= kZ * v.sigma_mm;
   ++audits_;
   if (!v.passed) ++failures_;
   return v;

@@ -269,11 +269,8 @@ RunContext::Dwell RunContext::dwell(Clock::time_point motion_end, bool adaptive_
     d.ended_early = d.steady;
     return d;
   }
-  // Audited: the window the adaptive dwell would have read (what is queued delivered first, as
-  // measureHere does), then on to settle_s.
-  io.poll(Clock::now());
-  watchBar();
-  window_.clear();
+  // Audited: the window the adaptive dwell would have read, then on to settle_s.
+  clearWindow();
   {
     const Collecting collect(collecting_);
     spinUntil(std::min(until, Clock::now() + fromSeconds(config.bar_window_s)), true);
@@ -356,13 +353,17 @@ RunContext::Followed RunContext::moveWatchingForBar(const JointsDeg& target,
   return f;
 }
 
-RunContext::Measurement RunContext::measureHere(double window_s) {
-  Measurement m;
-  // Readings still queued from before the dwell ended (the run thread was late, e.g. on a loaded
-  // machine) may be of the arm in motion: delivered now, they stay out of the window.
+void RunContext::clearWindow() {
+  // Readings still queued from before (the run thread was late, e.g. on a loaded machine) may be
+  // of the arm in motion: delivered now, they stay out of the window.
   io.poll(Clock::now());
   watchBar();  // what they say of the bar counts as any reading's does
   window_.clear();
+}
+
+RunContext::Measurement RunContext::measureHere(double window_s) {
+  Measurement m;
+  clearWindow();
   const Collecting collect(collecting_);
   m.bar_window_start = Clock::now();
   m.joints_deg = io.where();

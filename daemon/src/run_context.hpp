@@ -177,6 +177,8 @@ class RunContext {
 
  private:
   void onBarLine(const drivers::BarReading& r);
+  // Before a window collects: what is queued delivered (and watched), then the window emptied.
+  void clearWindow();
   // Believed detached: stops the move (StopRun) once the bar's readings have left the reference
   // taken before it (the bar is attached after all).
   void watchDetached();

@@ -7,7 +7,7 @@
 //   earlier; the reading the adaptive dwell would have taken (the window right after it judged
 //   steady) is compared with the fixed dwell's. A difference beyond what the noise explains is a
 //   bias of the adaptive dwell on this cell (a ring slower than its window, a noise figure set too
-//   high): after `failures_allowed` of them the run keeps the fixed dwell.
+//   high): past `kFailuresAllowed` of them the run keeps the fixed dwell.
 // Deterministic: the same figures give the same answers.
 #pragma once
 
@@ -32,28 +32,22 @@ class StillNoise {
 
 class DwellAudit {
  public:
-  struct Criteria {
-    double z = 4;              // a difference beyond z sigma fails the audit
-    int failures_allowed = 1;  // the adaptive dwell is kept up to this many failed audits
-  };
+  static constexpr double kZ = 4;             // a difference beyond kZ sigma fails the audit
+  static constexpr int kFailuresAllowed = 1;  // the adaptive dwell is kept up to this many
   struct Verdict {
     double difference_mm = 0;  // adaptive window's mean - fixed window's mean
     double sigma_mm = 0;       // the difference's standard deviation with no bias
     bool passed = true;
   };
-  DwellAudit() = default;
-  explicit DwellAudit(const Criteria& c) : c_(c) {}
-
-  // One audited point: each window's mean and number of readings, and the reader's noise.
+  // One audited point: each window's mean and number of readings (> 0), and the reader's noise.
   Verdict add(double adaptive_mean_mm, std::size_t adaptive_readings, double fixed_mean_mm,
               std::size_t fixed_readings, double noise_mm);
   // The adaptive dwell still trusted (no more failed audits than allowed).
-  bool trusted() const { return failures_ <= c_.failures_allowed; }
+  bool trusted() const { return failures_ <= kFailuresAllowed; }
   int audits() const { return audits_; }
   int failures() const { return failures_; }
 
  private:
-  Criteria c_;
   int audits_ = 0, failures_ = 0;
 };
 
