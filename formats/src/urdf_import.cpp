@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <map>
 #include <optional>
 #include <stdexcept>
 
@@ -84,6 +85,15 @@ UrdfImport urdfToModel(const std::string& urdf_text, const std::string& source,
   };
   const urdf::ModelInterfaceSharedPtr urdf = urdf::parseURDF(urdf_text);
   if (!urdf) fail("not a URDF that urdfdom can read (its reasons are printed above)");
+  // urdfdom keeps one parent per link and drops a second joint into it without a word: a link
+  // below two joints closes a loop, which no serial chain has.
+  std::map<std::string, std::string> parent_joint_of;
+  for (const auto& [name, joint] : urdf->joints_) {
+    const auto [first, inserted] = parent_joint_of.emplace(joint->child_link_name, name);
+    if (!inserted)
+      fail("link '" + joint->child_link_name + "' is the child of two joints ('" + first->second +
+           "' and '" + name + "'): the links form a loop, a URDF must be a tree");
+  }
 
   UrdfImport out;
   out.base_link = options.base_link;

@@ -168,3 +168,47 @@ TEST_CASE("a URDF robocal cannot model is refused, naming the joint or link") {
   CHECK_THROWS_WITH(urdfToModel("<robot", "broken.urdf"),
                     Contains("broken.urdf: not a URDF that urdfdom can read"));
 }
+
+TEST_CASE(
+    "a URDF's other shapes robocal cannot model: floating, planar, seven joints, a branch, "
+    "a missing link, a loop") {
+  const auto refused = [](const std::string& text, const std::string& what,
+                          const UrdfImportOptions& options = {}) {
+    CHECK_THROWS_WITH(urdfToModel(text, "arm.urdf", options),
+                      Contains("arm.urdf: ") && Contains(what));
+  };
+  for (const std::string type : {"floating", "planar"})
+    refused(replaced(kUr5, R"(name="elbow_joint" type="revolute")",
+                     "name=\"elbow_joint\" type=\"" + type + "\""),
+            "joint 'elbow_joint' is " + type);
+  // A seventh joint past the wrist: the flange's fixed frame made revolute, the tip below it.
+  const std::string seven =
+      replaced(kUr5, R"(<joint name="ee_fixed_joint" type="fixed">)",
+               R"(<joint name="ee_fixed_joint" type="continuous"><axis xyz="0 0 1"/>)");
+  UrdfImportOptions to_ee;
+  to_ee.tip_link = "ee_link";
+  refused(seven,
+          "more than six movable joints from 'world' to 'ee_link' (the seventh: "
+          "'ee_fixed_joint')",
+          to_ee);
+  // A second movable joint out of the shoulder (a second arm on the same base).
+  const std::string branch = replaced(kUr5, R"(<link name="shoulder_link"/>)",
+                                      R"(<link name="shoulder_link"/><link name="other_arm"/>
+  <joint name="other_joint" type="continuous"><parent link="shoulder_link"/>
+    <child link="other_arm"/><axis xyz="0 0 1"/></joint>)");
+  refused(branch, "the chain branches at link 'shoulder_link'");
+  refused(branch, "'other_joint'");
+  refused(branch, "'shoulder_lift_joint'");
+  refused(branch, "say where it ends with --tip LINK");
+  // With the tip named, the branch is not in the way.
+  UrdfImportOptions to_tool;
+  to_tool.tip_link = "tool0";
+  CHECK(urdfToModel(branch, "arm.urdf", to_tool).tip_link == "tool0");
+  // A joint to a link that is not declared: urdfdom refuses it while parsing.
+  refused(replaced(kUr5, R"(<link name="forearm_link"/>)", ""), "not a URDF that urdfdom can read");
+  // A joint from the flange back to the shoulder closes a loop, which urdfdom reads.
+  refused(replaced(kUr5, R"(<link name="tool0"/>)",
+                   R"(<link name="tool0"/><joint name="back" type="fixed"><parent link="tool0"/>
+    <child link="shoulder_link"/></joint>)"),
+          "link 'shoulder_link' is the child of two joints");
+}
