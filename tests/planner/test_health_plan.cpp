@@ -215,22 +215,21 @@ TEST_CASE("the plan file says what the plan is for, and old files are calibratio
 }
 
 TEST_CASE("the check plan's own points: an unchanged robot passes, a moved joint 2 fails") {
-  // A calibrated model of a perturbed truth (nine shells at 0 and at 150 mm), then the check
-  // plan's points measured on that truth and on the truth with joint 2's offset moved.
+  // A calibrated model of a perturbed truth (the reference cell's grid plan, at the paper's
+  // noise), then the check plan's points measured on that truth and on the truth with joint 2's
+  // offset moved.
   const Model& nom = nominal();
   const Plan& plan = checkPlanOfDefaultCell();
   std::mt19937_64 rng(5);
   const Model truth = perturbModel(nom, PerturbationSigmas{}, rng);
-  std::vector<Sample> calibration;
-  for (const ShellRequest& req : shellRequests(allConnections(), {0.0, 150.0}, 40)) {
-    const auto poses = shellPoses(nom, req, rng).poses;
-    const auto s = measureShell(truth, req, poses, {0.084, 0}, rng);
-    calibration.insert(calibration.end(), s.begin(), s.end());
-  }
+  std::vector<Sample> calibration = planSamples(truth, planCell(nom, gridCell()));
+  std::normal_distribution<double> calibration_noise(0, 0.084);
+  for (Sample& s : calibration) s.length_mm += calibration_noise(rng);
   const SolveResult fit = solveCalibration(nom, calibration);
   Model active = withParams(nom, fit.params);
   active.provenance = ModelProvenance{};
   active.provenance->rms_mm = fit.after.rms_mm;
+  active.covariance = fit.covariance;  // as a written model carries it
 
   auto checkSamples = [&](const Model& robot) {
     std::normal_distribution<double> noise(0, 0.084);

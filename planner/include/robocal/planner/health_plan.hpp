@@ -25,9 +25,14 @@ inline constexpr int kHealthCheckOrientations = 3;
 inline constexpr double kHealthCheckJoint13Deg = 0.02;
 inline constexpr double kHealthCheckJoint46Deg = 0.05;
 inline constexpr double kHealthCheckTranslationMm = 0.1;
+// The bar noise the design assumes when the model gives none (its fit's RMS): the main job's bar
+// (robocal-cellsim's, a good LVDT bar's), at which the sizes above are to be detected.
+inline constexpr double kHealthCheckDesignNoiseMm = 0.035;
 // The operator's time per shell that the check's total assumes: take the bar off the previous
 // connection, seat it on the next, confirm (the first with the check's extension put on).
 inline constexpr double kHealthCheckOperatorMinPerShell = 1.0;
+// What the whole check should take, the operator's swaps included.
+inline constexpr double kHealthCheckMinutes = 5.0;
 
 // The check's extension: the midpoint of the widest gap between the calibration's extensions
 // (sorted; 75 mm for [0, 150]), or, when the calibration used one extension e, e plus half the
@@ -47,9 +52,11 @@ CellConfig healthCheckCell(const CellConfig& calibration);
 
 // Plans the check on healthCheckCell(calibration): kHealthCheckPoints points, shared equally by
 // its shells, chosen greedily from each shell's safe candidates to raise sum_k log(1 + S_k), S_k
-// the noncentrality sum_points (dL/dp_k d_k / sigma)^2 of a change d_k of parameter k (the
-// targets above, for every joint offset and link translation; sigma the paper's 0.084 mm), so
-// that no parameter's signature is left weak; each shell's points in a short tour, joined by the
+// the noncentrality of the verdict's test of a change d_k of parameter k (the targets above, for
+// every joint offset and link translation) at the bar's noise sigma (the model's fit RMS, else
+// kHealthCheckDesignNoiseMm), against an active model as uncertain as its covariance says (the
+// model's own, else the covariance a fit of the calibration cell's grid would leave), so that no
+// parameter's signature is left weak; each shell's points in a short tour, joined by the
 // ordinary planner (every safety rule of docs/plan-format.md). Purpose kCheck, with the
 // identification summary (summarizeIdentifiability). Throws PlanError.
 Plan planHealthCheck(const Model& model, const CellConfig& calibration);
