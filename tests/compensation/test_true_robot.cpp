@@ -29,7 +29,7 @@ JointsDeg joints(double a, double b, double c, double d, double e, double f) {
 
 }  // namespace
 
-TEST_CASE("true robot: the ideal one is exactly its model; each effect has its size and sign") {
+TEST_CASE("true robot: the ideal one is exactly its model, and each effect has its size and sign") {
   const Model model = puma560NominalModel();
   const TrueRobot ideal{model, Realism::ideal()};
   const TrueRobot typical{model, Realism::typical(puma560NominalModel().compliance->load)};

@@ -103,7 +103,7 @@ struct Browser {
 
 }  // namespace
 
-TEST_CASE("web port: the page, /metrics and /console.json over HTTP; bad requests answered",
+TEST_CASE("web port: the page, /metrics and /console.json over HTTP, and bad requests answered",
           "[web]") {
   WebFixture f;
   const unsigned short port = f.daemon->webPort();
@@ -141,7 +141,7 @@ TEST_CASE("web port: the page, /metrics and /console.json over HTTP; bad request
              Contains("HTTP/1.1 200"));
 }
 
-TEST_CASE("web port: the WebSocket carries the TCP protocol; actions need the token", "[web]") {
+TEST_CASE("web port: the WebSocket carries the TCP protocol, and actions need the token", "[web]") {
   WebFixture f;
   const unsigned short port = f.daemon->webPort();
   Browser b(port);

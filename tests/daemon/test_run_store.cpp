@@ -63,7 +63,8 @@ TEST_CASE("the newest fit on disk is found again, and damaged result files are s
   CHECK(skipped[1].find("result-set3.json") != std::string::npos);
 }
 
-TEST_CASE("samples carry their time; a run folder from before the time column keeps its layout") {
+TEST_CASE(
+    "samples carry their time, and a run folder from before the time column keeps its layout") {
   TempDir dir;
   daemon::RunStore store(dir.path.string());
   Sample s;

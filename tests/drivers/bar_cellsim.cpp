@@ -195,8 +195,9 @@ TEST_CASE("Bar: other line formats and units", "[drivers][bar]") {
   }
 }
 
-TEST_CASE("Bar: a true robot with backlash reads its joints' last direction; --realism ideal not",
-          "[drivers][bar]") {
+TEST_CASE(
+    "Bar: a true robot with backlash reads its joints' last direction, and --realism ideal not",
+    "[drivers][bar]") {
   // Joint 2 with 0.04 deg of backlash: its angle is 0.02 deg ahead of its reading in the direction
   // it last moved (cellsim starts as if every joint had moved up).
   const std::string realism = "{\"backlash_deg\": [0, 0.04, 0, 0, 0, 0]}";

@@ -154,7 +154,7 @@ void printTable(const std::vector<Case>& cases, const std::vector<Tally>& tallie
 }  // namespace
 
 TEST_CASE(
-    "the short check, 20 seeds: unchanged robots pass, also on a noisier day; the design's "
+    "the short check, 20 seeds: unchanged robots pass, also on a noisier day, and the design's "
     "changes fail and are named") {
   const Case cases[] = {
       {"unchanged", -1, 0, 1},
@@ -180,7 +180,8 @@ TEST_CASE(
   }
 }
 
-TEST_CASE("unchanged robots read 1.5 times as noisy as their calibration: about 1 % named") {
+TEST_CASE("unchanged robots read 1.5 times as noisy as their calibration: about 1 % named",
+          "[heavy]") {
   // The check's own level, estimated from its 30 residuals, scatters by 13 %. Judged at it with
   // the normal's significance, 10 of these 300 robots (25 of 1,000) were named something; with
   // Student's t for the check's degrees of freedom, 6 (13 of 1,000). What is left are checks

@@ -26,7 +26,7 @@ bool anyContains(const std::vector<std::string>& problems, const std::string& te
 
 }  // namespace
 
-TEST_CASE("verdict: an ordinary calibration has no problems; each bad input has its own") {
+TEST_CASE("verdict: an ordinary calibration has no problems, and each bad input has its own") {
   const Model nominal = puma560NominalModel();
   const Model truth = perturbed(1.0, 81);
   std::vector<Sample> samples = measure(truth, planShells(nominal, "all", 0, 30, 82), 0.084, 83);
@@ -129,7 +129,8 @@ TEST_CASE("adequacy: backlash shows as a pattern of the approach, an ideal robot
 }
 
 TEST_CASE(
-    "adequacy: revisits measure the bar's noise; a residual the noise cannot explain is found") {
+    "adequacy: revisits measure the bar's noise, and a residual the noise cannot explain is "
+    "found") {
   const Model nominal = puma560NominalModel();
   const Model truth = perturbed(1.0, 95);
   Shells shells = planShells(nominal, "all", 0, 40, 105);
