@@ -85,6 +85,17 @@ UrdfImport urdfToModel(const std::string& urdf_text, const std::string& source,
   };
   const urdf::ModelInterfaceSharedPtr urdf = urdf::parseURDF(urdf_text);
   if (!urdf) fail("not a URDF that urdfdom can read (its reasons are printed above)");
+  // urdfdom's links hold their children by shared_ptr: a loop of links in a file (refused below,
+  // or off the chain and never seen) would never be freed. Cut them when done, however it ends.
+  struct CutLinksAtExit {
+    const urdf::ModelInterface& model;
+    ~CutLinksAtExit() {
+      for (const auto& entry : model.links_) {
+        entry.second->child_links.clear();
+        entry.second->child_joints.clear();
+      }
+    }
+  } cut_links_at_exit{*urdf};
   // urdfdom keeps one parent per link and drops a second joint into it without a word: a link
   // below two joints closes a loop, which no serial chain has.
   std::map<std::string, std::string> parent_joint_of;
