@@ -139,12 +139,13 @@ int run(const std::vector<std::string>& argv) {
       std::printf("%s%g", i ? ", " : "", calibration_cell.bar.extension_lengths_mm[i]);
     std::printf(
         " mm); about %.1f min of robot time at %.0f deg/s with %.1f s dwell, plus the operator's "
-        "%d connections: about %.0f min in all\n",
+        "%d connections: about %.1f min in all\n",
         sum.duration_s / 60.0, cell.motion.joint_speed_deg_per_s, cell.motion.settle_s, sum.shells,
         sum.duration_s / 60.0 + sum.shells * kHealthCheckOperatorMinPerShell);
     std::printf(
         "check design: points where %g deg on joints 1-3, %g deg on joints 4-6 and %g mm on a "
-        "link move the bar most (a check is judged, not fitted: its rank does not matter)\n",
+        "link stand out most from the bar's noise and from what the calibration left uncertain "
+        "(a check is judged, not fitted: its rank does not matter)\n",
         kHealthCheckJoint13Deg, kHealthCheckJoint46Deg, kHealthCheckTranslationMm);
   }
   std::printf(
