@@ -86,7 +86,8 @@ UrdfImport urdfToModel(const std::string& urdf_text, const std::string& source,
   const urdf::ModelInterfaceSharedPtr urdf = urdf::parseURDF(urdf_text);
   if (!urdf) fail("not a URDF that urdfdom can read (its reasons are printed above)");
   // urdfdom's links hold their children by shared_ptr: a loop of links in a file (refused below,
-  // or off the chain and never seen) would never be freed. Cut them when done, however it ends.
+  // or off the chain and never seen) would never be freed. Cut them when done, however this
+  // function ends. (A loop through the root urdfdom refuses itself, and does not free.)
   struct CutLinksAtExit {
     const urdf::ModelInterface& model;
     ~CutLinksAtExit() {

@@ -74,11 +74,18 @@ Eigen::Matrix<double, kParamCount, 1> detectionTargets(double noise_mm) {
   return d;
 }
 
-// The bar noise the check is designed for: the model's fit RMS when it has one, else
-// kHealthCheckDesignNoiseMm.
+bool hasCovariance(const Model& model) {
+  return model.covariance && model.covariance->rows() == kParamCount &&
+         model.covariance->cols() == kParamCount;
+}
+
+// The bar noise the check is designed for: the level the verdict will judge it at.
 double designNoiseMm(const Model& model) {
-  return model.provenance && model.provenance->rms_mm > 0 ? model.provenance->rms_mm
-                                                          : kHealthCheckDesignNoiseMm;
+  if (model.provenance && model.provenance->rms_mm > 0) return model.provenance->rms_mm;
+  // A model with a covariance is the active one, judged at HealthOptions::fallback_rms_mm
+  // without a fit RMS; a nominal stands for the calibration to come.
+  constexpr double kVerdictFallbackMm = 0.084;
+  return hasCovariance(model) ? kVerdictFallbackMm : kHealthCheckDesignNoiseMm;
 }
 
 // The active model's parameter covariance over the noise variance, C / sigma^2 (ParamVector
@@ -88,9 +95,7 @@ double designNoiseMm(const Model& model) {
 // parameters it identifies and zero for the rest (as solveCalibration fixes them).
 Eigen::MatrixXd calibrationCovarianceOverNoise(const Model& model, const CellConfig& calibration,
                                                double noise_mm) {
-  if (model.covariance && model.covariance->rows() == kParamCount &&
-      model.covariance->cols() == kParamCount)
-    return *model.covariance / (noise_mm * noise_mm);
+  if (hasCovariance(model)) return *model.covariance / (noise_mm * noise_mm);
   Eigen::MatrixXd out = Eigen::MatrixXd::Zero(kParamCount, kParamCount);
   const ShellPlanner planner(model, calibration);
   std::vector<Sample> samples;
@@ -119,14 +124,47 @@ Eigen::MatrixXd calibrationCovarianceOverNoise(const Model& model, const CellCon
 
 }  // namespace
 
+CheckSignatures::CheckSignatures(const ParamVector& targets,
+                                 const Eigen::MatrixXd& covariance_over_noise)
+    : targets_(targets),
+      noncentrality_(Eigen::ArrayXd::Zero(kParamCount)),
+      unabsorbed_(Eigen::MatrixXd::Identity(kParamCount, kParamCount)),
+      covariance_(covariance_over_noise) {}
+
+Eigen::ArrayXXd CheckSignatures::gains(const Eigen::MatrixXd& gradients) const {
+  const Eigen::ArrayXXd innovation = (gradients * unabsorbed_).array();
+  const Eigen::ArrayXd variance =
+      1.0 + ((gradients * covariance_).array() * gradients.array()).rowwise().sum();
+  return (innovation.rowwise() * targets_.transpose().array()).square().colwise() / variance;
+}
+
+void CheckSignatures::add(const ParamRow& gradient) {
+  const Eigen::RowVectorXd innovation = gradient * unabsorbed_;
+  const double variance = 1.0 + (gradient * covariance_ * gradient.transpose())(0, 0);
+  noncentrality_ += (innovation.transpose().array() * targets_.array()).square() / variance;
+  const Eigen::VectorXd kalman_gain = covariance_ * gradient.transpose() / variance;
+  unabsorbed_ -= kalman_gain * innovation;
+  covariance_ -= kalman_gain * (gradient * covariance_);
+}
+
+double CheckSignatures::weakest() const {
+  double least = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < kParamCount; ++k)
+    if (targets_[k] > 0) least = std::min(least, noncentrality_[k]);
+  return least;
+}
+
+CheckSignatures healthCheckSignatures(const Model& model, const CellConfig& calibration) {
+  const double noise_mm = designNoiseMm(model);
+  return CheckSignatures(detectionTargets(noise_mm),
+                         calibrationCovarianceOverNoise(model, calibration, noise_mm));
+}
+
 Plan planHealthCheck(const Model& model, const CellConfig& calibration) {
   const CellConfig cell = healthCheckCell(calibration);
   const ShellPlanner planner(model, cell);
   const Kinematics kin(model);
-  const double noise_mm = designNoiseMm(model);
-  const Eigen::Matrix<double, kParamCount, 1> targets = detectionTargets(noise_mm);
-  const Eigen::MatrixXd calibration_covariance =
-      calibrationCovarianceOverNoise(model, calibration, noise_mm);
+  const CheckSignatures before_any_point = healthCheckSignatures(model, calibration);
   const double extension_mm = cell.bar.extension_lengths_mm.front();
 
   struct Pool {
@@ -154,11 +192,7 @@ Plan planHealthCheck(const Model& model, const CellConfig& calibration) {
   // Greedy: the points that raise sum_k log(1 + S_k) most per second of robot time (the dwell
   // and the move from the nearest point already chosen on the shell, from the connect pose at
   // first, that move's time weighted by `travel_weight`), the shells in turn so that each gets
-  // its share. S_k is what the verdict's test of a change d_k sees against an active model
-  // uncertain by C, taken point by point: a point's reading less what the points before it
-  // taught of the model's error carries g (I - D) d of the change (D: the share of it those
-  // points took for the model's error) over a variance sigma^2 + g C' g^T (C': the model's
-  // covariance after them). With C = 0 it is (g d / sigma)^2.
+  // its share (S_k: CheckSignatures).
   const MotionSettings& motion = cell.motion;
   auto travel_s = [&](const JointsDeg& a, const JointsDeg& b) {
     return (b - a).cwiseAbs().maxCoeff() / motion.joint_speed_deg_per_s;
@@ -177,25 +211,19 @@ Plan planHealthCheck(const Model& model, const CellConfig& calibration) {
       for (const ShellPoint& p : c.points)
         nearest_s[s].push_back(c.connect ? travel_s(c.connect->joints_deg, p.joints_deg) : 0.0);
     }
-    Eigen::ArrayXd noncentrality = Eigen::ArrayXd::Zero(kParamCount);
-    Eigen::MatrixXd unabsorbed = Eigen::MatrixXd::Identity(kParamCount, kParamCount);  // I - D
-    Eigen::MatrixXd covariance = calibration_covariance;                               // C'
+    CheckSignatures signatures = before_any_point;
     for (int round = 0; round < per_shell; ++round)
       for (size_t s = 0; s < pools.size(); ++s) {
         const Pool& pool = pools[s];
-        const Eigen::ArrayXd base = (1.0 + noncentrality).log();
-        const Eigen::MatrixXd innovation = pool.gradients * unabsorbed;
-        const Eigen::ArrayXd variance =
-            1.0 + ((pool.gradients * covariance).array() * pool.gradients.array()).rowwise().sum();
+        const Eigen::ArrayXd base = (1.0 + signatures.noncentrality()).log();
+        const Eigen::ArrayXXd signal = signatures.gains(pool.gradients);
         Eigen::Index best = -1;
         double best_gain = -1;
         for (Eigen::Index i = 0; i < pool.gradients.rows(); ++i) {
           const size_t k = static_cast<size_t>(i);
           if (chosen[s][k]) continue;
-          const Eigen::ArrayXd signal =
-              (innovation.row(i).transpose().array() * targets.array()).square() / variance[i];
           const double gain =
-              ((1.0 + noncentrality + signal).log() - base).sum() /
+              ((1.0 + signatures.noncentrality() + signal.row(i).transpose()).log() - base).sum() /
               (motion.settle_s + motion.move_overhead_s + travel_weight * nearest_s[s][k]);
           if (gain > best_gain) {
             best_gain = gain;
@@ -204,21 +232,13 @@ Plan planHealthCheck(const Model& model, const CellConfig& calibration) {
         }
         if (best < 0) continue;  // the shell has fewer candidates than its share
         chosen[s][static_cast<size_t>(best)] = 1;
-        noncentrality +=
-            (innovation.row(best).transpose().array() * targets.array()).square() / variance[best];
-        const Eigen::RowVectorXd g = pool.gradients.row(best);
-        const Eigen::VectorXd kalman_gain = covariance * g.transpose() / variance[best];
-        unabsorbed -= kalman_gain * innovation.row(best);
-        covariance -= kalman_gain * (g * covariance);
+        signatures.add(pool.gradients.row(best));
         const JointsDeg& q = pool.candidates.points[static_cast<size_t>(best)].joints_deg;
         for (size_t i = 0; i < pool.candidates.points.size(); ++i)
           nearest_s[s][i] =
               std::min(nearest_s[s][i], travel_s(q, pool.candidates.points[i].joints_deg));
       }
-    double weakest = std::numeric_limits<double>::infinity();
-    for (int k = 0; k < kParamCount; ++k)
-      if (targets[k] > 0) weakest = std::min(weakest, noncentrality[k]);
-    return Pick{chosen, weakest};
+    return Pick{chosen, signatures.weakest()};
   };
   // The pick's travel is a guess (it does not see the vias a move needs, which the join adds):
   // a few weights of it. Of the plans with every point, the one whose weakest signature is the

@@ -138,36 +138,68 @@ TEST_CASE("the check plan: 30 points on two shells at 75 mm, about 5 minutes in 
   }
   // The planner's own estimate, with a minute of the operator's per shell.
   const double minutes = plan.summary.duration_s / 60;
-  CHECK(minutes + kHealthCheckShells * kHealthCheckOperatorMinPerShell <= 5.5);
+  CHECK(minutes + kHealthCheckShells * kHealthCheckOperatorMinPerShell <= kHealthCheckMinutes);
 }
 
-TEST_CASE("the check's points are where the changes it must see move the bar most") {
+TEST_CASE("the check's signatures taken point by point are the verdict's whitened test") {
+  // S_k = d_k^2 e_k^T J^T (I + J C J^T)^-1 J e_k (noise 1) for random gradients J and a random
+  // covariance C with a zero block (parameters the calibration fixes), against the sequence.
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> unit(0, 1);
+  const int n = 12;
+  Eigen::MatrixXd jac(n, kParamCount);
+  for (Eigen::Index i = 0; i < jac.size(); ++i) jac(i) = unit(rng);
+  Eigen::MatrixXd root(kParamCount, kParamCount);
+  for (Eigen::Index i = 0; i < root.size(); ++i) root(i) = 0.3 * unit(rng);
+  Eigen::MatrixXd covariance = root * root.transpose();
+  covariance.topRows(6).setZero();
+  covariance.leftCols(6).setZero();
+  ParamVector targets;
+  for (int k = 0; k < kParamCount; ++k) targets[k] = k % 5 == 0 ? 0.0 : 0.5 + 0.1 * (k % 7);
+  for (const bool whitened : {false, true}) {
+    INFO((whitened ? "whitened" : "white"));
+    const Eigen::MatrixXd c =
+        whitened ? covariance : Eigen::MatrixXd::Zero(kParamCount, kParamCount);
+    CheckSignatures sequence(targets, c);
+    for (int i = 0; i < n; ++i) {
+      // What a point would add is what adding it adds.
+      const Eigen::ArrayXd before = sequence.noncentrality();
+      const Eigen::ArrayXXd gain = sequence.gains(jac.row(i));
+      sequence.add(jac.row(i));
+      for (int k = 0; k < kParamCount; ++k)
+        CHECK(sequence.noncentrality()[k] - before[k] ==
+              Approx(gain(0, k)).margin(1e-12 * sequence.noncentrality()[k]));
+    }
+    const Eigen::MatrixXd scatter = Eigen::MatrixXd::Identity(n, n) + jac * c * jac.transpose();
+    const Eigen::MatrixXd whitened_jac = scatter.llt().matrixL().solve(jac);
+    double least = 1e300;
+    for (int k = 0; k < kParamCount; ++k) {
+      const double batch = targets[k] * targets[k] * whitened_jac.col(k).squaredNorm();
+      CHECK(sequence.noncentrality()[k] == Approx(batch).epsilon(1e-9));
+      if (targets[k] > 0) least = std::min(least, batch);
+    }
+    CHECK(sequence.weakest() == Approx(least).epsilon(1e-9));
+  }
+}
+
+TEST_CASE("the check's points are where the changes it must see stand out most") {
   // Against the same number of points of the old coarse grid (latitudes 30 and 70, longitudes
-  // every 30 deg) on the same shells: the weakest parameter's signal is larger.
+  // every 30 deg) on the same shells, judged as the design judges them (the verdict's whitened
+  // test against the calibration the cell's grid would give): the weakest signature is stronger.
   const Plan& designed = checkPlanOfDefaultCell();
   CellConfig grid_cell = healthCheckCell(gridCell());
   grid_cell.grid = {30, 70, 40, 0, 60};  // 2 x 6 = 12 a shell
   const Plan grid = planCell(nominal(), grid_cell);
   auto weakest = [](const Plan& plan) {
     const Kinematics kin(nominal());
-    Eigen::Matrix<double, kParamCount, 1> s = Eigen::Matrix<double, kParamCount, 1>::Zero();
+    CheckSignatures signatures = healthCheckSignatures(nominal(), gridCell());
     ParamRow g;
     for (const Sample& x : planSamples(nominal(), plan)) {
       kin.barLengthGradient(x.joints_deg, nominal().balls_mm[x.ball_index],
                             nominal().chucks_mm[x.chuck_index], g);
-      s += g.transpose().cwiseAbs2();
+      signatures.add(g);
     }
-    // The bar's change squared for each change the check is designed for, the least of them.
-    double least = 1e300;
-    for (int j = 0; j < kJointCount; ++j)
-      least = std::min(
-          least,
-          s[jointParamIndex(j)] *
-              std::pow(degToRad(j < 3 ? kHealthCheckJoint13Deg : kHealthCheckJoint46Deg), 2));
-    for (int l = 0; l < kLinkCount; ++l)
-      for (int a = 0; a < 3; ++a)
-        least = std::min(least, s[linkParamIndex(l) + a] * std::pow(kHealthCheckTranslationMm, 2));
-    return least / plan.summary.points;
+    return signatures.weakest() / plan.summary.points;
   };
   CHECK(weakest(designed) > 1.2 * weakest(grid));
 }

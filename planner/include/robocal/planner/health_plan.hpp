@@ -6,10 +6,12 @@
 // joints 4-6, 0.1 mm on a link) move the bar most, each parameter's signature made strong. No I/O.
 #pragma once
 
+#include <robocal/kinematics/kinematics.hpp>
 #include <robocal/kinematics/model.hpp>
 #include <robocal/planner/cell.hpp>
 #include <robocal/planner/plan.hpp>
 
+#include <Eigen/Core>
 #include <vector>
 
 namespace robocal {
@@ -34,6 +36,42 @@ inline constexpr double kHealthCheckOperatorMinPerShell = 1.0;
 // What the whole check should take, the operator's swaps included.
 inline constexpr double kHealthCheckMinutes = 5.0;
 
+// What the verdict's test of a change of each parameter sees over a sequence of check points:
+// its noncentrality S_k = d_k^2 e_k^T J^T (sigma^2 I + J C J^T)^-1 J e_k, J the points' bar
+// gradients, C the active model's covariance (solver/health.hpp whitens the check's residuals by
+// it: what the calibration left uncertain is not a change). Taken point by point, as a Kalman
+// filter would: a point's reading, less what the points before it taught of the model's error,
+// carries g (I - D) d of the change (D: the share of it those points took for the model's error)
+// over a variance sigma^2 + g C' g^T (C': the model's covariance after them). With C = 0, the sum
+// of (g d_k / sigma)^2. Math only.
+class CheckSignatures {
+ public:
+  // `targets`: d_k / sigma per parameter (ParamVector units per mm), 0 for those not looked
+  // for; `covariance_over_noise`: C / sigma^2 (54 x 54).
+  CheckSignatures(const ParamVector& targets, const Eigen::MatrixXd& covariance_over_noise);
+  // What each of the points whose bar gradients are the rows of `gradients` (n x 54) would add
+  // to each S_k, taken next (n x 54).
+  Eigen::ArrayXXd gains(const Eigen::MatrixXd& gradients) const;
+  void add(const ParamRow& gradient);
+  const Eigen::ArrayXd& noncentrality() const { return noncentrality_; }
+  // min_k S_k over the parameters looked for.
+  double weakest() const;
+
+ private:
+  ParamVector targets_;
+  Eigen::ArrayXd noncentrality_;
+  Eigen::MatrixXd unabsorbed_;  // I - D
+  Eigen::MatrixXd covariance_;  // C' / sigma^2
+};
+
+// The signatures the check on healthCheckCell(calibration) is designed with, before any point:
+// targets the changes below over the bar's noise sigma (the model's fit RMS; else, with a
+// covariance, the verdict's fallback 0.084 mm; else kHealthCheckDesignNoiseMm), C the model's
+// covariance, or, for a model without one (a nominal, planned before the calibration exists),
+// the covariance a fit of the calibration cell's grid would leave, (J^T J)^-1 on the parameters
+// it identifies: the calibrated model the check will be judged with.
+CheckSignatures healthCheckSignatures(const Model& model, const CellConfig& calibration);
+
 // The check's extension: the midpoint of the widest gap between the calibration's extensions
 // (sorted; 75 mm for [0, 150]), or, when the calibration used one extension e, e plus half the
 // bar's nominal length. Never one of the calibration's.
@@ -51,12 +89,9 @@ std::vector<Connection> healthCheckConnections(const std::vector<Connection>& ca
 CellConfig healthCheckCell(const CellConfig& calibration);
 
 // Plans the check on healthCheckCell(calibration): kHealthCheckPoints points, shared equally by
-// its shells, chosen greedily from each shell's safe candidates to raise sum_k log(1 + S_k), S_k
-// the noncentrality of the verdict's test of a change d_k of parameter k (the targets above, for
-// every joint offset and link translation) at the bar's noise sigma (the model's fit RMS, else
-// kHealthCheckDesignNoiseMm), against an active model as uncertain as its covariance says (the
-// model's own, else the covariance a fit of the calibration cell's grid would leave), so that no
-// parameter's signature is left weak; each shell's points in a short tour, joined by the
+// its shells, chosen greedily from each shell's safe candidates to raise sum_k log(1 + S_k)
+// (healthCheckSignatures: every joint offset and link translation), so that no parameter's
+// signature is left weak; each shell's points in a short tour, joined by the
 // ordinary planner (every safety rule of docs/plan-format.md). Purpose kCheck, with the
 // identification summary (summarizeIdentifiability). Throws PlanError.
 Plan planHealthCheck(const Model& model, const CellConfig& calibration);
