@@ -208,9 +208,9 @@ void nameWhatMoved(const Model& active, const std::vector<Sample>& samples,
   for (int pass = 0; pass < 3 && ownLevel(named) > noise * 1.001; ++pass) {
     noise = ownLevel(named);
     // A level estimated from the check's own few dozen residuals is itself uncertain (13 % at
-    // 30): judged at it, the same significance named something on 25 of 1,000 unchanged robots
-    // read 1.5 times as noisy, and Student's t with the check's degrees of freedom on 13 (21 and
-    // 8 in another random stream; docs/health-check.md).
+    // 30): judged at it, the same significance named something on 22 of 1,000 unchanged robots
+    // read 1.5 times as noisy, and Student's t with the check's degrees of freedom on 5
+    // (docs/health-check.md).
     const double dof =
         static_cast<double>(samples.size()) - static_cast<double>(named.selected.size());
     named =

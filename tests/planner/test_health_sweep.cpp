@@ -185,14 +185,13 @@ TEST_CASE(
 TEST_CASE("unchanged robots read 1.5 times as noisy as their calibration: about 1 % named",
           "[heavy]") {
   // The check's own level, estimated from its 30 residuals, scatters by 13 %. Judged at it with
-  // the normal's significance, 10 of these 300 robots (25 of 1,000) were named something; with
-  // Student's t for the check's degrees of freedom, 6 (13 of 1,000). What is left are checks
-  // whose noisier readings happened to scatter less than the calibration's.
+  // the normal's significance, 11 of these 300 robots (22 of 1,000) were named something; with
+  // Student's t for the check's degrees of freedom, 2 (5 of 1,000).
   const std::vector<Case> cases = {{"unchanged", -1, 0, 1.5}};
   const int seeds = 300;
   const std::vector<Tally> t = sweep(cases, seeds, 0.035);
-  CHECK(t[0].named_something <= 7);
-  CHECK(t[0].fail <= 7);
+  CHECK(t[0].named_something <= 5);
+  CHECK(t[0].fail <= 5);
 }
 
 TEST_CASE("the short check's sweep: every joint offset and link translation, 200 seeds",

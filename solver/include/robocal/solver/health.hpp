@@ -63,7 +63,7 @@ struct HealthOptions {
   // A parameter is named as moved when adding it to the refit lowers chi^2 = sum (r / noise)^2
   // by at least significance^2, the residuals whitened by the active model's own uncertainty
   // (its covariance: the calibration's error at the check's poses is not a change). With 3.5 an
-  // unchanged robot is named something in 6 of 1,000 checks, 8 to 13 of 1,000 when the check is
+  // unchanged robot is named something in 4 of 1,000 checks, 4 to 5 of 1,000 when the check is
   // 1.5 times as noisy and judged at its own level, where the significance is Student's t
   // equivalent for the check's degrees of freedom (docs/health-check.md). A model without a
   // covariance is not whitened: about 4% at 3.5, 2.5% at 4.
