@@ -3,6 +3,7 @@
 #include <robocal/kinematics/kinematics.hpp>
 #include <robocal/kinematics/units.hpp>
 #include <robocal/planner/design.hpp>
+#include <robocal/solver/health.hpp>
 #include <robocal/solver/problem.hpp>
 
 #include <Eigen/Core>
@@ -63,8 +64,8 @@ namespace {
 
 // The change each parameter must be seen at, over the bar's noise (ParamVector units per mm); 0
 // for the parameters the check is not designed for (link angles, gains).
-Eigen::Matrix<double, kParamCount, 1> detectionTargets(double noise_mm) {
-  Eigen::Matrix<double, kParamCount, 1> d = Eigen::Matrix<double, kParamCount, 1>::Zero();
+ParamVector detectionTargets(double noise_mm) {
+  ParamVector d = ParamVector::Zero();
   for (int link = 0; link < kLinkCount; ++link)
     for (int axis = 0; axis < 3; ++axis)
       d[linkParamIndex(link) + axis] = kHealthCheckTranslationMm / noise_mm;
@@ -74,18 +75,12 @@ Eigen::Matrix<double, kParamCount, 1> detectionTargets(double noise_mm) {
   return d;
 }
 
-bool hasCovariance(const Model& model) {
-  return model.covariance && model.covariance->rows() == kParamCount &&
-         model.covariance->cols() == kParamCount;
-}
-
 // The bar noise the check is designed for: the level the verdict will judge it at.
 double designNoiseMm(const Model& model) {
   if (model.provenance && model.provenance->rms_mm > 0) return model.provenance->rms_mm;
-  // A model with a covariance is the active one, judged at HealthOptions::fallback_rms_mm
-  // without a fit RMS; a nominal stands for the calibration to come.
-  constexpr double kVerdictFallbackMm = 0.084;
-  return hasCovariance(model) ? kVerdictFallbackMm : kHealthCheckDesignNoiseMm;
+  // A model with a covariance is the active one, judged at the verdict's fallback without a fit
+  // RMS; a nominal stands for the calibration to come.
+  return hasParamCovariance(model) ? HealthOptions{}.fallback_rms_mm : kHealthCheckDesignNoiseMm;
 }
 
 // The active model's parameter covariance over the noise variance, C / sigma^2 (ParamVector
@@ -95,7 +90,7 @@ double designNoiseMm(const Model& model) {
 // parameters it identifies and zero for the rest (as solveCalibration fixes them).
 Eigen::MatrixXd calibrationCovarianceOverNoise(const Model& model, const CellConfig& calibration,
                                                double noise_mm) {
-  if (hasCovariance(model)) return *model.covariance / (noise_mm * noise_mm);
+  if (hasParamCovariance(model)) return *model.covariance / (noise_mm * noise_mm);
   Eigen::MatrixXd out = Eigen::MatrixXd::Zero(kParamCount, kParamCount);
   const ShellPlanner planner(model, calibration);
   std::vector<Sample> samples;

@@ -48,10 +48,6 @@ ParamVector priorSigmas(const HealthOptions& o) {
                      o.prior_gain);
 }
 
-bool hasParamCovariance(const Model& m) {
-  return m.covariance && m.covariance->rows() == kParamCount && m.covariance->cols() == kParamCount;
-}
-
 // The small refit: forward selection of the parameters that explain the residuals, each refitted
 // with the prior from the active model, at the noise level `noise` (docs/health-check.md, "What
 // moved").
@@ -246,6 +242,10 @@ const char* healthReferenceName(HealthReference reference) {
       return "fallback";
   }
   return "?";
+}
+
+bool hasParamCovariance(const Model& m) {
+  return m.covariance && m.covariance->rows() == kParamCount && m.covariance->cols() == kParamCount;
 }
 
 std::string parameterChangeText(int index, double change) {
