@@ -52,13 +52,17 @@ points. Every plan's summary ends with its predicted work-volume error and its c
   --whole-range-weight W  an optimal plan's objective is sqrt(work^2 + W whole^2): the
                    predicted error in the work volume and over the arm's whole range, so
                    that the plan stays robust off its volume; 0: the work volume alone  [0.1]
+  --compliance     plan for a fit that also identifies the gravity compliance of the joints
+                   carrying the arm's weight (robocal solve --compliance): their twist is
+                   designed for and its uncertainty is in the predicted errors. Needs the
+                   model's "compliance" load
   --quiet          print only the totals, not each shell and dropped point
 )";
 
 int run(const std::vector<std::string>& argv) {
   const Args args(
       argv, {"model", "cell", "out", "time-budget-min", "points", "noise-mm", "whole-range-weight"},
-      {"help", "quiet", "check"});
+      {"help", "quiet", "check", "compliance"});
   if (args.flag("help")) {
     std::fputs(kHelp, stdout);
     return 0;
@@ -75,12 +79,22 @@ int run(const std::vector<std::string>& argv) {
   design.points = static_cast<int>(args.number("points", 0));
   design.noise_sigma_mm = args.number("noise-mm", design.noise_sigma_mm);
   design.whole_range_weight = args.number("whole-range-weight", kWholeRangeWeight);
+  design.compliance = args.flag("compliance");
   if (design.budget_s < 0 || design.points < 0 || design.noise_sigma_mm <= 0 ||
       !(design.whole_range_weight >= 0))
     throw UsageError(
         "--time-budget-min, --points and --whole-range-weight must be >= 0, --noise-mm > 0");
   const bool optimal = design.budget_s > 0 || design.points > 0;
   if (optimal && check) throw UsageError("--check plans a fixed health check: no budget");
+  if (check && design.compliance)
+    throw UsageError("--compliance designs a calibration; a health check is not fitted");
+  if (design.compliance && !model.compliance) {
+    std::fprintf(stderr,
+                 "robocal plan: %s: --compliance needs the model's \"compliance\" load (link "
+                 "masses, the fixture; docs/model-format.md)\n",
+                 args.required("model").c_str());
+    return 2;
+  }
 
   PlanRequest request;
   request.kind = optimal ? PlanKind::kOptimal : check ? PlanKind::kCheck : PlanKind::kGrid;

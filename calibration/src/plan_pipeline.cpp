@@ -57,10 +57,10 @@ PlannedCell planCalibration(const Model& model, const CellConfig& calibration_ce
   // A calibration plan's accuracy where the user works and beyond (a check is not fitted).
   if (!check) {
     PlanSummary& s = out.plan.summary;
-    const double work_mm =
-        predictedWorkVolumeError(model, out.plan, work_joints, design.noise_sigma_mm);
-    const double whole_mm =
-        predictedWorkVolumeError(model, out.plan, whole_joints, design.noise_sigma_mm);
+    const double work_mm = predictedWorkVolumeError(model, out.plan, work_joints,
+                                                    design.noise_sigma_mm, design.compliance);
+    const double whole_mm = predictedWorkVolumeError(model, out.plan, whole_joints,
+                                                     design.noise_sigma_mm, design.compliance);
     if (std::isfinite(work_mm)) {
       s.predicted_work_volume_error_mm = work_mm;
       if (std::isfinite(whole_mm)) s.predicted_whole_range_error_mm = whole_mm;

@@ -2,7 +2,9 @@
 
 #include "parallel.hpp"
 
+#include <robocal/kinematics/gravity.hpp>
 #include <robocal/kinematics/kinematics.hpp>
+#include <robocal/solver/compliance_fit.hpp>
 #include <robocal/solver/identifiability.hpp>
 #include <robocal/solver/problem.hpp>
 
@@ -80,36 +82,44 @@ WorkVolumeCriterion::WorkVolumeCriterion(const Model& model, std::vector<int> id
                                          const Eigen::Vector3d& tool_point_mm,
                                          double noise_sigma_mm,
                                          const std::vector<JointsDeg>& whole_range_joints,
-                                         double whole_range_weight)
-    : model_(model), identified_(std::move(identified)), sigma_(noise_sigma_mm) {
+                                         double whole_range_weight,
+                                         std::vector<int> compliance_joints)
+    : model_(model),
+      identified_(std::move(identified)),
+      compliance_joints_(std::move(compliance_joints)),
+      sigma_(noise_sigma_mm) {
   if (work_joints.empty()) throw std::invalid_argument("work volume: no poses");
   if (!(noise_sigma_mm > 0)) throw std::invalid_argument("noise sigma must be > 0 mm");
   if (!(whole_range_weight >= 0)) throw std::invalid_argument("whole-range weight must be >= 0");
+  if (!compliance_joints_.empty() && !model.compliance)
+    throw std::invalid_argument("the model has no compliance load to design its twist for");
   const int r = size();
   const Kinematics kin(model);
   const auto jacobians = [&](const std::vector<JointsDeg>& joints) {
-    std::vector<PositionJacobian> g(joints.size());
-    for (size_t k = 0; k < joints.size(); ++k)
-      kin.ballPositionJacobian(joints[k], tool_point_mm, g[k]);
+    std::vector<Eigen::MatrixXd> g(joints.size());
+    PositionJacobian full;
+    for (size_t k = 0; k < joints.size(); ++k) {
+      kin.ballPositionJacobian(joints[k], tool_point_mm, full);
+      g[k] = columns(full, joints[k]);
+    }
     return g;
   };
-  const std::vector<PositionJacobian> g = jacobians(work_joints);
+  const std::vector<Eigen::MatrixXd> g = jacobians(work_joints);
   // Scale each parameter by its typical effect on the tool over the work volume, so that the
-  // information matrix is well conditioned whatever the units (mm, rad, gain).
+  // information matrix is well conditioned whatever the units (mm, rad, gain, deg/(N m)).
   scale_ = Eigen::VectorXd::Ones(r);
   for (int a = 0; a < r; ++a) {
     double sum = 0;
-    for (const PositionJacobian& gk : g) sum += gk.col(identified_[a]).squaredNorm();
+    for (const Eigen::MatrixXd& gk : g) sum += gk.col(a).squaredNorm();
     const double typical = std::sqrt(sum / g.size());
     if (typical > 1e-12) scale_[a] = 1.0 / typical;
   }
   // The mean of G_k^T G_k over poses, in the scaled parameters.
-  const auto meanWeight = [&](const std::vector<PositionJacobian>& poses) {
+  const auto meanWeight = [&](const std::vector<Eigen::MatrixXd>& poses) {
     Eigen::MatrixXd w = Eigen::MatrixXd::Zero(r, r);
-    Eigen::MatrixXd gk(3, r);
-    for (const PositionJacobian& full : poses) {
-      for (int a = 0; a < r; ++a) gk.col(a) = full.col(identified_[a]) * scale_[a];
-      w.noalias() += gk.transpose() * gk;
+    for (const Eigen::MatrixXd& gk : poses) {
+      const Eigen::MatrixXd scaled = gk * scale_.asDiagonal();
+      w.noalias() += scaled.transpose() * scaled;
     }
     return Eigen::MatrixXd(w / static_cast<double>(poses.size()));
   };
@@ -118,13 +128,27 @@ WorkVolumeCriterion::WorkVolumeCriterion(const Model& model, std::vector<int> id
     w_ += whole_range_weight * meanWeight(jacobians(whole_range_joints));
 }
 
+template <typename Full>
+Eigen::MatrixXd WorkVolumeCriterion::columns(const Full& full, const JointsDeg& joints) const {
+  Eigen::MatrixXd out(full.rows(), size());
+  const int n = static_cast<int>(identified_.size());
+  for (int a = 0; a < n; ++a) out.col(a) = full.col(identified_[a]);
+  if (compliance_joints_.empty()) return out;
+  // A twist of c deg/(N m) turns joint j by c tau_j deg, as its offset would.
+  const std::array<double, kJointCount> torque_nm =
+      gravityTorqueNm(Kinematics(model_).chainFrames(joints), model_.compliance->load);
+  for (size_t c = 0; c < compliance_joints_.size(); ++c) {
+    const int j = compliance_joints_[c];
+    out.col(n + static_cast<int>(c)) = full.col(jointParamIndex(j)) * torque_nm[j] * kRadPerDeg;
+  }
+  return out;
+}
+
 Eigen::VectorXd WorkVolumeCriterion::row(const Connection& c, const JointsDeg& joints) const {
   ParamRow gradient;
   Kinematics(model_).barLengthGradient(joints, model_.balls_mm[c.ball_index],
                                        model_.chucks_mm[c.chuck_index], gradient);
-  Eigen::VectorXd out(size());
-  for (int a = 0; a < size(); ++a) out[a] = gradient[identified_[a]] * scale_[a] / sigma_;
-  return out;
+  return columns(gradient, joints).row(0).transpose().cwiseProduct(scale_) / sigma_;
 }
 
 double WorkVolumeCriterion::predictedRms(const Eigen::MatrixXd& information) const {
@@ -154,12 +178,24 @@ std::vector<int> identifiedParameters(const Model& model, const std::vector<Samp
   return out;
 }
 
+std::vector<int> designComplianceJoints(const Model& model, const std::vector<Sample>& samples,
+                                        bool compliance) {
+  if (!compliance) return {};
+  if (!model.compliance)
+    throw std::invalid_argument(
+        "the model has no compliance load (link masses, the fixture) to plan its twist for: add "
+        "a \"compliance\" object (docs/model-format.md)");
+  return loadedJoints(model, samples);
+}
+
 double predictedWorkVolumeError(const Model& model, const Plan& plan,
-                                const std::vector<JointsDeg>& work_joints, double noise_sigma_mm) {
+                                const std::vector<JointsDeg>& work_joints, double noise_sigma_mm,
+                                bool compliance) {
   const std::vector<Sample> samples = planSamples(model, plan);
   if (samples.empty()) return std::numeric_limits<double>::infinity();
   const WorkVolumeCriterion criterion(model, identifiedParameters(model, samples), work_joints,
-                                      Eigen::Vector3d::Zero(), noise_sigma_mm);
+                                      Eigen::Vector3d::Zero(), noise_sigma_mm, {}, 0,
+                                      designComplianceJoints(model, samples, compliance));
   Eigen::MatrixXd m = Eigen::MatrixXd::Zero(criterion.size(), criterion.size());
   for (const ShellPlan& shell : plan.shells)
     for (const PlanStep& step : shell.steps)
@@ -363,7 +399,8 @@ Plan planOptimal(const Model& model, const CellConfig& cell,
   if (all.empty()) throw PlanError("no candidate point on any shell can be reached safely");
   const WorkVolumeCriterion criterion(model, identifiedParameters(model, all), work_joints,
                                       Eigen::Vector3d::Zero(), options.noise_sigma_mm,
-                                      options.whole_range_joints, options.whole_range_weight);
+                                      options.whole_range_joints, options.whole_range_weight,
+                                      designComplianceJoints(model, all, options.compliance));
   const int r = criterion.size();
   parallelFor(pools.size(), [&](size_t s) {
     ShellPool& p = pools[s];
@@ -413,7 +450,8 @@ Plan planOptimal(const Model& model, const CellConfig& cell,
   if (!have_best) throw PlanError("no points fit the budget");
   summarizeIdentifiability(model, best);
   rep.predicted_cell_time_s = best.summary.cell_time_s;
-  rep.predicted_rms_mm = predictedWorkVolumeError(model, best, work_joints, options.noise_sigma_mm);
+  rep.predicted_rms_mm = predictedWorkVolumeError(model, best, work_joints, options.noise_sigma_mm,
+                                                  options.compliance);
   if (report) *report = rep;
   return best;
 }

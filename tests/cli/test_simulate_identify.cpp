@@ -103,6 +103,16 @@ TEST_CASE("robocal commands reject bad input with a clear message") {
   r = runRobocal("simulate --model " + kModel + " --noise-mm abc");
   CHECK(r.exit_code == 2);
   CHECK_THAT(r.output, Contains("--noise-mm: 'abc' is not a number"));
+  // robocal plan --compliance needs the model's load, and designs a calibration, not a check.
+  r = runRobocal("plan --compliance --quiet --model " ROBOCAL_SOURCE_DIR
+                 "/config/rx160.json --cell " ROBOCAL_SOURCE_DIR "/config/cell-rx160.json --out " +
+                 (dir / "p.json"));
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.output, Contains("rx160.json: --compliance needs the model's \"compliance\" load"));
+  r = runRobocal("plan --check --compliance --model " + kModel +
+                 " --cell " ROBOCAL_SOURCE_DIR "/config/cell.json");
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.output, Contains("a health check is not fitted"));
   r = runRobocal("frobnicate");
   CHECK(r.exit_code == 2);
 }

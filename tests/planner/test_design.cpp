@@ -82,6 +82,68 @@ TEST_CASE("the predicted work-volume error is the fit's covariance carried to th
   CHECK(predictedWorkVolumeError(nominal(), half, workJoints(), kSigma) > predicted);
 }
 
+TEST_CASE("a design for compliance predicts the error of a fit that also fits the twist",
+          "[design][compliance]") {
+  const Plan plan = planCell(nominal(), smallCell());
+  constexpr double kSigma = 0.084;
+  const std::vector<Sample> samples = planSamples(nominal(), plan);
+  const std::vector<int> identified = identifiedParameters(nominal(), samples);
+  const std::vector<int> twisted = designComplianceJoints(nominal(), samples, true);
+  REQUIRE(twisted == std::vector<int>{1, 2});  // the PUMA's shoulder and elbow carry the weight
+  // Independently: the twist's columns by differences of the model that twists (Kinematics with
+  // a compliance), the parameters' from the analytic gradient.
+  const int r = static_cast<int>(identified.size() + twisted.size());
+  const Kinematics rigid(nominal());
+  constexpr double kStep = 1e-5;  // deg/(N m): a few thousandths of a degree of twist
+  const auto twistedBy = [&](int joint, double c) {
+    Model m = nominal();
+    m.compliance->deg_per_nm[joint] = c;
+    return Kinematics(m);
+  };
+  Eigen::MatrixXd jac(samples.size(), r);
+  for (size_t i = 0; i < samples.size(); ++i) {
+    const Sample& s = samples[i];
+    const Eigen::Vector3d& ball = nominal().balls_mm[s.ball_index];
+    const Eigen::Vector3d& chuck = nominal().chucks_mm[s.chuck_index];
+    ParamRow g;
+    rigid.barLengthGradient(s.joints_deg, ball, chuck, g);
+    for (size_t a = 0; a < identified.size(); ++a) jac(i, a) = g[identified[a]];
+    for (size_t c = 0; c < twisted.size(); ++c)
+      jac(i, identified.size() + c) =
+          (twistedBy(twisted[c], kStep).barLength(s.joints_deg, ball, chuck) -
+           twistedBy(twisted[c], -kStep).barLength(s.joints_deg, ball, chuck)) /
+          (2 * kStep);
+  }
+  const Eigen::MatrixXd cov =
+      kSigma * kSigma * (jac.transpose() * jac).ldlt().solve(Eigen::MatrixXd::Identity(r, r));
+  double sum = 0;
+  for (const JointsDeg& q : workJoints()) {
+    PositionJacobian full;
+    rigid.ballPositionJacobian(q, Eigen::Vector3d::Zero(), full);
+    Eigen::MatrixXd g(3, r);
+    for (size_t a = 0; a < identified.size(); ++a) g.col(a) = full.col(identified[a]);
+    for (size_t c = 0; c < twisted.size(); ++c)
+      g.col(identified.size() + c) =
+          (twistedBy(twisted[c], kStep).ballPosition(q, Eigen::Vector3d::Zero()) -
+           twistedBy(twisted[c], -kStep).ballPosition(q, Eigen::Vector3d::Zero())) /
+          (2 * kStep);
+    sum += (g * cov * g.transpose()).trace();
+  }
+  const double independent = std::sqrt(sum / workJoints().size());
+  const double designed = predictedWorkVolumeError(nominal(), plan, workJoints(), kSigma, true);
+  const double rigid_fit = predictedWorkVolumeError(nominal(), plan, workJoints(), kSigma);
+  INFO("with the twist " << designed << " mm (independently " << independent << "), rigid fit "
+                         << rigid_fit << " mm");
+  CHECK(designed == Approx(independent).epsilon(1e-4));
+  CHECK(designed > rigid_fit * 1.01);  // two more parameters from the same data cost something
+  // A model without a load has no twist to design for.
+  Model no_load = nominal();
+  no_load.compliance.reset();
+  CHECK_THROWS_AS(predictedWorkVolumeError(no_load, plan, workJoints(), kSigma, true),
+                  std::invalid_argument);
+  CHECK(designComplianceJoints(no_load, samples, false).empty());
+}
+
 TEST_CASE("an optimal plan of N points predicts less error than a grid of as many", "[design]") {
   const CellConfig cell = smallCell();
   const Plan grid = planCell(nominal(), cell);
@@ -131,6 +193,28 @@ TEST_CASE("a robust optimal plan trades a little of the work volume for the whol
         Approx(predicted(knife_edge, whole)));
   options.whole_range_weight = -1;
   CHECK_THROWS_AS(planOptimal(nominal(), cell, workJoints(), options), std::invalid_argument);
+}
+
+TEST_CASE("an optimal plan designed for compliance measures the twist better",
+          "[design][compliance]") {
+  const CellConfig cell = smallCell();
+  DesignOptions options = smallOptions();
+  options.points = 60;
+  options.whole_range_joints = wholeRangeJoints(*makeArm(nominal()), 100);
+  options.whole_range_weight = 1;
+  const Plan rigid = planOptimal(nominal(), cell, workJoints(), options);
+  options.compliance = true;
+  DesignReport report;
+  const Plan designed = planOptimal(nominal(), cell, workJoints(), options, &report);
+  const auto withTwist = [&](const Plan& plan, const std::vector<JointsDeg>& where) {
+    return predictedWorkVolumeError(nominal(), plan, where, 0.084, true);
+  };
+  const std::vector<JointsDeg>& whole = options.whole_range_joints;
+  INFO("fit with the twist, whole range: plan designed rigid "
+       << withTwist(rigid, whole) << " mm, designed for it " << withTwist(designed, whole));
+  CHECK(withTwist(designed, whole) < 0.95 * withTwist(rigid, whole));
+  CHECK(report.predicted_rms_mm == Approx(withTwist(designed, workJoints())));
+  CHECK(checkPlan(nominal(), cell, designed).empty());
 }
 
 TEST_CASE("an optimal plan keeps its time budget, swaps included", "[design][heavy]") {

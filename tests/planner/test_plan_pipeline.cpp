@@ -32,6 +32,14 @@ TEST_CASE(
   CHECK(planCalibration(nominal(), cell, noisy).plan.summary.predicted_work_volume_error_mm ==
         Approx(2 * s.predicted_work_volume_error_mm).epsilon(1e-6));
 
+  // Planned for a fit that also identifies the twist: the same points, predicted with it.
+  PlanRequest twisted{PlanKind::kGrid, {}};
+  twisted.design.compliance = true;
+  const PlanSummary& t = planCalibration(nominal(), cell, twisted).plan.summary;
+  CHECK(t.points == s.points);
+  CHECK(t.predicted_work_volume_error_mm > s.predicted_work_volume_error_mm);
+  CHECK(t.predicted_whole_range_error_mm > s.predicted_whole_range_error_mm);
+
   // A check is judged, not fitted: no predicted error; its forecast only with a nominal model.
   const PlannedCell check = planCalibration(nominal(), gridCell(), {PlanKind::kCheck, {}});
   CHECK(check.plan.purpose == PlanPurpose::kCheck);

@@ -34,6 +34,10 @@ struct DesignOptions {
   // volume alone.
   double whole_range_weight = 0;
   std::vector<JointsDeg> whole_range_joints;
+  // Plan for a fit that also identifies the gravity compliance of the joints carrying the arm's
+  // weight (robocal solve --compliance): their twist per N m joins the parameters the design
+  // measures and the error it predicts. Needs the model's load (Model::compliance).
+  bool compliance = false;
 };
 
 // The work-volume objective for one model: the identified parameters, their column scaling and
@@ -44,13 +48,17 @@ class WorkVolumeCriterion {
   // `work_joints`: the nominal joints of the work volume's poses; `tool_point_mm` in the last
   // link's frame. Throws std::invalid_argument when work_joints is empty.
   // `whole_range_joints` with `whole_range_weight` > 0 add the whole range's term (above).
+  // `compliance_joints` (0-based) add each one's twist per N m as a parameter: its effect is the
+  // joint's offset column times its gravity torque at the pose (the model's load). Throws
+  // std::invalid_argument when they are given and the model has no load.
   WorkVolumeCriterion(const Model& model, std::vector<int> identified,
                       const std::vector<JointsDeg>& work_joints,
                       const Eigen::Vector3d& tool_point_mm, double noise_sigma_mm,
                       const std::vector<JointsDeg>& whole_range_joints = {},
-                      double whole_range_weight = 0);
+                      double whole_range_weight = 0, std::vector<int> compliance_joints = {});
 
-  int size() const { return static_cast<int>(identified_.size()); }
+  // Identified parameters, then the compliance's joints.
+  int size() const { return static_cast<int>(identified_.size() + compliance_joints_.size()); }
   // The scaled, noise-weighted identification row of one bar measurement.
   Eigen::VectorXd row(const Connection& connection, const JointsDeg& joints) const;
   const Eigen::MatrixXd& weight() const { return w_; }
@@ -59,9 +67,15 @@ class WorkVolumeCriterion {
   double predictedRms(const Eigen::MatrixXd& information) const;
 
  private:
+  // The unscaled columns of the criterion's parameters from all 54 (a Jacobian's columns, or a
+  // gradient's entries) at `joints`.
+  template <typename Full>
+  Eigen::MatrixXd columns(const Full& full, const JointsDeg& joints) const;
+
   const Model& model_;
   std::vector<int> identified_;
-  Eigen::VectorXd scale_;  // per identified parameter: 1 / typical |d length / d p|
+  std::vector<int> compliance_joints_;
+  Eigen::VectorXd scale_;  // per parameter: 1 / typical |d tool / d p| over the work volume
   Eigen::MatrixXd w_;
   double sigma_;
 };
@@ -77,9 +91,16 @@ struct DesignReport {
 // the best-conditioned ones (the same predicted tool error as the solver's own choice).
 std::vector<int> identifiedParameters(const Model& model, const std::vector<Sample>& samples);
 
-// Predicted RMS tool position error over the work volume (mm) of any plan's data points.
+// Predicted RMS tool position error over the work volume (mm) of any plan's data points; with
+// `compliance`, of a fit that also identifies the loaded joints' compliance (DesignOptions).
 double predictedWorkVolumeError(const Model& model, const Plan& plan,
-                                const std::vector<JointsDeg>& work_joints, double noise_sigma_mm);
+                                const std::vector<JointsDeg>& work_joints, double noise_sigma_mm,
+                                bool compliance = false);
+
+// The joints whose compliance a fit of these samples identifies (loadedJoints), for a design
+// with `compliance`; none without. Throws std::invalid_argument when the model has no load.
+std::vector<int> designComplianceJoints(const Model& model, const std::vector<Sample>& samples,
+                                        bool compliance);
 
 // Plans the cell with points chosen for the work volume: candidates on every shell of the
 // cell's connections and extensions (candidate_grid x orientations, all passing the planner's
