@@ -11,6 +11,7 @@
 # volume (robocal accuracy --whole-range).
 # ROBOCAL_SOLVE_ARGS: more options for robocal solve (e.g. --compliance).
 # ROBOCAL_PLAN_ARGS: more options for robocal plan (e.g. --time-budget-min 90).
+# ROBOCAL_NOISE_MM: the bar's reading noise (default the paper's 0.084 mm).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${ROBOCAL_BUILD_DIR:-$root/build}
@@ -25,8 +26,8 @@ trap 'rm -rf "$work"' EXIT
 echo "| seed | samples | fit RMS (mm) | nominal joints RMS / p95 (mm) | compensated RMS / p95 / max (mm) | ratio | model's own RMS (mm) | predicted RMS (mm) | orientation nominal / compensated RMS (deg) |"
 echo "|---|---|---|---|---|---|---|---|---|"
 for seed in $(seq 1 "$seeds"); do
-  "$bin" simulate --model "$model" --plan "$work/plan.json" --seed "$seed" --noise-mm 0.084 \
-    --realism "${ROBOCAL_REALISM:-ideal}" \
+  "$bin" simulate --model "$model" --plan "$work/plan.json" --seed "$seed" \
+    --noise-mm "${ROBOCAL_NOISE_MM:-0.084}" --realism "${ROBOCAL_REALISM:-ideal}" \
     --out "$work/s.csv" --truth-out "$work/truth.json" >/dev/null
   # --allow-partial: a fit the verdict refuses is still measured here (its problems in fit.json).
   # shellcheck disable=SC2086  # the options are words
@@ -39,6 +40,7 @@ for seed in $(seq 1 "$seeds"); do
     "${where[@]}" --json >"$work/acc.json"
   jq -r --argjson seed "$seed" --slurpfile fit "$work/fit.json" '
     def f(x): (x * 10000 | round) / 10000;
-    "| \($seed) | \($fit[0].n) | \(f($fit[0].rms_mm)) | \(f(.nominal_commanded_position_error_mm.rms)) / \(f(.nominal_commanded_position_error_mm.p95)) | \(f(.compensated_commanded_position_error_mm.rms)) / \(f(.compensated_commanded_position_error_mm.p95)) / \(f(.compensated_commanded_position_error_mm.max)) | \((.nominal_commanded_position_error_mm.rms / .compensated_commanded_position_error_mm.rms * 10 | round) / 10) | \(f(.calibrated_model_position_error_mm.rms)) | \(f(.predicted_position_error_mm.rms)) | \(f(.nominal_commanded_orientation_error_deg.rms)) / \(f(.compensated_commanded_orientation_error_deg.rms)) |"' \
+    def twist: if $fit[0].compliance then (if $fit[0].compliance.identified then " (twist kept)" else " (twist not kept)" end) else "" end;
+    "| \($seed)\(twist) | \($fit[0].n) | \(f($fit[0].rms_mm)) | \(f(.nominal_commanded_position_error_mm.rms)) / \(f(.nominal_commanded_position_error_mm.p95)) | \(f(.compensated_commanded_position_error_mm.rms)) / \(f(.compensated_commanded_position_error_mm.p95)) / \(f(.compensated_commanded_position_error_mm.max)) | \((.nominal_commanded_position_error_mm.rms / .compensated_commanded_position_error_mm.rms * 10 | round) / 10) | \(f(.calibrated_model_position_error_mm.rms)) | \(f(.predicted_position_error_mm.rms)) | \(f(.nominal_commanded_orientation_error_deg.rms)) / \(f(.compensated_commanded_orientation_error_deg.rms)) |"' \
     "$work/acc.json"
 done

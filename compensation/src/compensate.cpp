@@ -1,6 +1,7 @@
 #include <robocal/compensation/compensate.hpp>
 
 #include <robocal/formats/csv.hpp>
+#include <robocal/kinematics/gravity.hpp>
 #include <robocal/kinematics/units.hpp>
 
 #include <cmath>
@@ -65,7 +66,8 @@ Compensator::Compensator(const Model& nominal, const Model& calibrated, Compensa
           calibrated.provenance ? calibrated.provenance->approach_deg : 0.0)) {
   if (calibrated.covariance) {
     const Eigen::MatrixXd& c = *calibrated.covariance;
-    for (int i = 0; i < kParamCount; ++i)
+    // The 54's, then the twists' when the fit identified the compliance (Model::covariance).
+    for (int i = 0; i < c.rows(); ++i)
       if (c(i, i) > 0) estimated_.push_back(i);
     const int n = static_cast<int>(estimated_.size());
     covariance_.resize(n, n);
@@ -84,10 +86,23 @@ Eigen::Isometry3d Compensator::calibratedToolPose(const JointsDeg& q) const {
 
 double Compensator::predictedPositionError(const JointsDeg& q) const {
   if (!calibrated().covariance) return std::numeric_limits<double>::quiet_NaN();
+  const Kinematics& kin = calibrated_->kinematics();
   PositionJacobian full;
-  calibrated_->kinematics().ballPositionJacobian(q, options_.tool.translation(), full);
+  kin.ballPositionJacobian(q, options_.tool.translation(), full);
   Eigen::MatrixXd j(3, estimated_.size());
-  for (size_t k = 0; k < estimated_.size(); ++k) j.col(k) = full.col(estimated_[k]);
+  std::array<double, kJointCount> torque_nm{};
+  // A twist turns its joint by its torque (at the rigid pose, as Kinematics twists) times it.
+  if (!estimated_.empty() && estimated_.back() >= kParamCount)
+    torque_nm =
+        gravityTorqueNm(Kinematics(kin.params()).chainFrames(q), calibrated().compliance->load);
+  for (size_t k = 0; k < estimated_.size(); ++k) {
+    const int i = estimated_[k];
+    if (i < kParamCount)
+      j.col(k) = full.col(i);
+    else
+      j.col(k) =
+          full.col(jointParamIndex(i - kParamCount)) * torque_nm[i - kParamCount] * kRadPerDeg;
+  }
   // The error the fit found the model does not contain (ModelProvenance::unmodelled_mm), seen by
   // the bar along one direction: sqrt(3) times it in 3D, in quadrature with the parameters' part.
   const double unmodelled_mm = calibrated().provenance ? calibrated().provenance->unmodelled_mm : 0;
@@ -101,16 +116,23 @@ double Compensator::predictedOrientationError(const JointsDeg& q) const {
   // next to the IK (the tool point does not change the orientation).
   const ParamVector p0 = calibrated_->kinematics().params();
   const Eigen::Matrix3d r0 = calibrated_->kinematics().toolPose(q).linear();
-  constexpr double kStep = 1e-6;  // mm, rad or gain: far above rounding, far below curvature
+  constexpr double kStep = 1e-6;  // mm, rad, gain or deg/(N m): above rounding, below curvature
   Eigen::MatrixXd j(3, estimated_.size());
   for (size_t k = 0; k < estimated_.size(); ++k) {
-    ParamVector plus = p0, minus = p0;
-    plus[estimated_[k]] += kStep;
-    minus[estimated_[k]] -= kStep;
-    const Eigen::Matrix3d rp =
-        Kinematics(withParams(calibrated_->model(), plus)).toolPose(q).linear();
-    const Eigen::Matrix3d rm =
-        Kinematics(withParams(calibrated_->model(), minus)).toolPose(q).linear();
+    Model plus = calibrated_->model(), minus = plus;
+    const int i = estimated_[k];
+    if (i < kParamCount) {
+      ParamVector p_plus = p0, p_minus = p0;
+      p_plus[i] += kStep;
+      p_minus[i] -= kStep;
+      plus = withParams(plus, p_plus);
+      minus = withParams(minus, p_minus);
+    } else {  // a twist, deg/(N m)
+      plus.compliance->deg_per_nm[i - kParamCount] += kStep;
+      minus.compliance->deg_per_nm[i - kParamCount] -= kStep;
+    }
+    const Eigen::Matrix3d rp = Kinematics(plus).toolPose(q).linear();
+    const Eigen::Matrix3d rm = Kinematics(minus).toolPose(q).linear();
     const Eigen::AngleAxisd dp(rp * r0.transpose()), dm(rm * r0.transpose());
     j.col(k) = (dp.axis() * dp.angle() - dm.axis() * dm.angle()) / (2 * kStep);
   }

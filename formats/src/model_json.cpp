@@ -4,6 +4,7 @@
 #include <robocal/jsonread/strict_json.hpp>
 #include <robocal/kinematics/units.hpp>
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <nlohmann/json.hpp>
@@ -173,9 +174,24 @@ nlohmann::ordered_json provenanceToJson(const ModelProvenance& p) {
 }
 
 // The covariance block: the estimated parameters by name and their covariance in interface units
-// (mm, deg, gain); ParamVector units inside.
+// (mm, deg, gain, and deg/(N m) for a joint's twist "J2.compliance"); ParamVector units inside,
+// the twists after the 54 (Model::covariance).
 double interfaceScale(int index) {
-  return paramKind(index) == ParamKind::kAngle ? kDegPerRad : 1.0;
+  return index < kParamCount && paramKind(index) == ParamKind::kAngle ? kDegPerRad : 1.0;
+}
+
+// A covariance row's index from its name: one of the 54, or kParamCount + j for
+// "J<j+1>.compliance"; -1 for neither.
+int covarianceIndex(const std::string& name) {
+  if (name.size() == 13 && name[0] == 'J' && name[1] >= '1' && name[1] <= '6' &&
+      name.compare(2, std::string::npos, ".compliance") == 0)
+    return twistCovarianceIndex(name[1] - '1');
+  return paramIndexByName(name);
+}
+
+std::string covarianceName(int index) {
+  return index < kParamCount ? paramName(index)
+                             : "J" + std::to_string(index - kParamCount + 1) + ".compliance";
 }
 
 Eigen::MatrixXd covarianceFromJson(const Reader& r, const json& value) {
@@ -191,7 +207,7 @@ Eigen::MatrixXd covarianceFromJson(const Reader& r, const json& value) {
     const std::string path = where + ".parameters[" + std::to_string(k) + "]";
     const json& name = (*names_it)[k];
     if (!name.is_string()) r.fail(path, "expected a parameter name such as \"J2.offset\"");
-    const int i = paramIndexByName(name.get<std::string>());
+    const int i = covarianceIndex(name.get<std::string>());
     if (i < 0) r.fail(path, "unknown parameter \"" + name.get<std::string>() + "\"");
     for (int seen : index)
       if (seen == i) r.fail(path, "\"" + name.get<std::string>() + "\" is listed twice");
@@ -200,7 +216,10 @@ Eigen::MatrixXd covarianceFromJson(const Reader& r, const json& value) {
   const size_t n = index.size();
   if (!matrix_it->is_array() || matrix_it->size() != n)
     r.fail(where + ".matrix", "expected " + std::to_string(n) + " rows, one per parameter");
-  Eigen::MatrixXd cov = Eigen::MatrixXd::Zero(kParamCount, kParamCount);
+  const bool twists =
+      std::any_of(index.begin(), index.end(), [](int i) { return i >= kParamCount; });
+  const int size = twists ? kParamCount + kJointCount : kParamCount;
+  Eigen::MatrixXd cov = Eigen::MatrixXd::Zero(size, size);
   for (size_t a = 0; a < n; ++a) {
     const std::string row_path = where + ".matrix[" + std::to_string(a) + "]";
     const json& row = (*matrix_it)[a];
@@ -223,16 +242,18 @@ Eigen::MatrixXd covarianceFromJson(const Reader& r, const json& value) {
 nlohmann::ordered_json covarianceToJson(const Eigen::MatrixXd& cov) {
   using ojson = nlohmann::ordered_json;
   std::vector<int> index;
-  for (int i = 0; i < kParamCount; ++i)
+  for (int i = 0; i < cov.rows(); ++i)
     if (cov(i, i) > 0) index.push_back(i);
   ojson names = ojson::array(), matrix = ojson::array();
   for (int a : index) {
-    names.push_back(paramName(a));
+    names.push_back(covarianceName(a));
     ojson row = ojson::array();
     for (int b : index) row.push_back(cov(a, b) * interfaceScale(a) * interfaceScale(b));
     matrix.push_back(row);
   }
-  return ojson{{"units", "products of the parameters' units: mm, deg, gain"},
+  const bool twists = cov.rows() > kParamCount;
+  return ojson{{"units", twists ? "products of the parameters' units: mm, deg, gain, deg/(N m)"
+                                : "products of the parameters' units: mm, deg, gain"},
                {"parameters", names},
                {"matrix", matrix}};
 }
@@ -340,8 +361,12 @@ Model modelFromJson(const json& root, const std::string& source) {
     o.finish();
     m.compliance = c;
   }
-  if (const auto it = root.find("covariance"); it != root.end())
+  if (const auto it = root.find("covariance"); it != root.end()) {
     m.covariance = covarianceFromJson(r, *it);
+    if (m.covariance->rows() > kParamCount && !m.compliance)
+      r.fail("covariance.parameters",
+             "a joint's twist (\"J<n>.compliance\") in a model without a \"compliance\" object");
+  }
   return m;
 }
 

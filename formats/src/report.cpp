@@ -313,7 +313,9 @@ Model calibratedModel(const FitAssessment& fit, const FitOrigin& origin,
   p.robocal_version = robocalVersion();
   p.warnings = fit.problems;
   m.provenance = std::move(p);
-  m.covariance = fit.fit.covariance;  // what compensate's predicted errors come from
+  // What compensate's predicted errors come from: with the twist's when the fit identified it.
+  m.covariance = fit.compliance && fit.compliance->identified ? fit.compliance->covariance
+                                                              : fit.fit.covariance;
   return m;
 }
 

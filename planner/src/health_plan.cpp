@@ -90,7 +90,8 @@ double designNoiseMm(const Model& model) {
 // parameters it identifies and zero for the rest (as solveCalibration fixes them).
 Eigen::MatrixXd calibrationCovarianceOverNoise(const Model& model, const CellConfig& calibration,
                                                double noise_mm) {
-  if (hasParamCovariance(model)) return *model.covariance / (noise_mm * noise_mm);
+  if (hasParamCovariance(model))
+    return model.covariance->topLeftCorner(kParamCount, kParamCount) / (noise_mm * noise_mm);
   Eigen::MatrixXd out = Eigen::MatrixXd::Zero(kParamCount, kParamCount);
   const ShellPlanner planner(model, calibration);
   std::vector<Sample> samples;

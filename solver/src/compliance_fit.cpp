@@ -90,6 +90,8 @@ SolveResult solveWithCompliance(const Model& start, const std::vector<Sample>& s
   SolveResult fit = fitAt(twist);
   const SolveResult at_start = fit;  // kept when the twist is not told from noise
   Eigen::MatrixXd jac(m, k);
+  // What a twist moves the fitted parameters by (ParamVector units per deg/(N m)).
+  Eigen::MatrixXd absorbed(kParamCount, k);
   if (k > 0) {
     // The Jacobian of the fitted residuals by differences, each step a 1e-3 deg RMS twist.
     for (Eigen::Index c = 0; c < k; ++c) {
@@ -97,7 +99,9 @@ SolveResult solveWithCompliance(const Model& start, const std::vector<Sample>& s
       const double step = 1e-3 / rms[j];
       std::array<double, kJointCount> moved = twist;
       moved[j] += step;
-      jac.col(c) = (fitAt(moved).residuals - fit.residuals) / step;
+      const SolveResult at_moved = fitAt(moved);
+      jac.col(c) = (at_moved.residuals - fit.residuals) / step;
+      absorbed.col(c) = (at_moved.params - fit.params) / step;
     }
     // Two Gauss-Newton steps on it (the residual is nearly linear in the twist).
     const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(jac);
@@ -120,6 +124,22 @@ SolveResult solveWithCompliance(const Model& start, const std::vector<Sample>& s
     out.identified =
         out.chi2 > out.chi2_threshold &&
         std::all_of(twist.begin(), twist.end(), [](double c) { return std::abs(c) <= 0.1; });
+    // The joint covariance (the header): the 54's own at the fitted twist, and the twist's
+    // carried into them by what it moves them.
+    if (out.identified) {
+      const int n = kParamCount;
+      out.covariance = Eigen::MatrixXd::Zero(twistCovarianceIndex(kJointCount),
+                                             twistCovarianceIndex(kJointCount));
+      const Eigen::MatrixXd moved = absorbed * cov;  // Cov(params, twist)
+      out.covariance.topLeftCorner(n, n) = fit.covariance + moved * absorbed.transpose();
+      for (Eigen::Index a = 0; a < k; ++a) {
+        const int ja = twistCovarianceIndex(out.joints[a]);
+        out.covariance.block(0, ja, n, 1) = moved.col(a);
+        out.covariance.block(ja, 0, 1, n) = moved.col(a).transpose();
+        for (Eigen::Index b = 0; b < k; ++b)
+          out.covariance(ja, twistCovarianceIndex(out.joints[b])) = cov(a, b);
+      }
+    }
     // The largest twist over the samples and its sigma (the twist's gradient in c is the torque).
     for (const auto& t : tau) {
       double twist_deg = 0;
@@ -140,6 +160,7 @@ SolveResult solveWithCompliance(const Model& start, const std::vector<Sample>& s
     out.compliance.deg_per_nm = start.compliance->deg_per_nm;
     return at_start;
   }
+
   fit.before = at_start.before;  // the start's, with the start's twist
   return fit;
 }

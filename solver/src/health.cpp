@@ -96,7 +96,8 @@ Named selectMoved(const Model& active, const std::vector<Sample>& samples,
   Eigen::LLT<Eigen::MatrixXd> whitening(Eigen::MatrixXd::Identity(n, n));
   if (hasParamCovariance(active))
     whitening.compute(Eigen::MatrixXd::Identity(n, n) +
-                      out.jac * *active.covariance * out.jac.transpose() / (noise * noise));
+                      out.jac * active.covariance->topLeftCorner(kParamCount, kParamCount) *
+                          out.jac.transpose() / (noise * noise));
   std::vector<int>& selected = out.selected;
   while (static_cast<int>(selected.size()) < options.max_named) {
     const Eigen::MatrixXd jac = whitening.matrixL().solve(out.jac);
@@ -245,7 +246,8 @@ const char* healthReferenceName(HealthReference reference) {
 }
 
 bool hasParamCovariance(const Model& m) {
-  return m.covariance && m.covariance->rows() == kParamCount && m.covariance->cols() == kParamCount;
+  return m.covariance && m.covariance->rows() >= kParamCount &&
+         m.covariance->cols() == m.covariance->rows();
 }
 
 std::string parameterChangeText(int index, double change) {

@@ -457,6 +457,54 @@ TEST_CASE("a calibrated model's covariance survives its file, and a bad one is r
   CHECK_THROWS_WITH(parseModel(json.dump(), "m.json"), Contains("not symmetric"));
 }
 
+TEST_CASE("an identified twist's covariance survives its file and widens the predicted errors") {
+  const Model nominal = puma560NominalModel();
+  const Model rigid = calibrate(nominal, perturbed(9), 9);
+  REQUIRE(nominal.compliance);  // the shipped PUMA carries its load, with no twist
+  Model m = rigid;
+  m.compliance = nominal.compliance;
+  m.compliance->deg_per_nm[1] = 0.0007;
+  // Joint 2's twist known to 0.0002 deg/(N m), independent of the 54 here.
+  Eigen::MatrixXd cov =
+      Eigen::MatrixXd::Zero(twistCovarianceIndex(kJointCount), twistCovarianceIndex(kJointCount));
+  cov.topLeftCorner(kParamCount, kParamCount) = *rigid.covariance;
+  constexpr double kTwistSigma = 0.0002;
+  cov(twistCovarianceIndex(1), twistCovarianceIndex(1)) = kTwistSigma * kTwistSigma;
+  m.covariance = cov;
+  const Model back = parseModel(formatModel(m), "m.json");
+  REQUIRE(back.covariance);
+  REQUIRE(back.covariance->rows() == cov.rows());
+  CHECK((*back.covariance - cov).cwiseAbs().maxCoeff() < 1e-12 * cov.cwiseAbs().maxCoeff());
+  CHECK(modelToJson(m)["covariance"]["parameters"].back() == "J2.compliance");
+  Model twisted_only = m;
+  twisted_only.covariance = cov.topLeftCorner(kParamCount, kParamCount);
+  for (const JointsDeg& q : programJoints(5, 4)) {
+    // The twist's own part: the ball's change per deg/(N m), by differences of the model.
+    Model plus = m, minus = m;
+    plus.compliance->deg_per_nm[1] += 1e-5;
+    minus.compliance->deg_per_nm[1] -= 1e-5;
+    const Eigen::Vector3d per_twist = (Kinematics(plus).ballPosition(q, Eigen::Vector3d::Zero()) -
+                                       Kinematics(minus).ballPosition(q, Eigen::Vector3d::Zero())) /
+                                      2e-5;
+    const double without = Compensator(nominal, twisted_only).predictedPositionError(q);
+    const double with = Compensator(nominal, back).predictedPositionError(q);
+    INFO(q.transpose() << ": " << without << " -> " << with << " mm");
+    CHECK(with == Approx(std::hypot(without, kTwistSigma * per_twist.norm())).epsilon(1e-4));
+    CHECK(Compensator(nominal, back).predictedOrientationError(q) >
+          Compensator(nominal, twisted_only).predictedOrientationError(q));
+  }
+  // A twist's covariance needs the model's compliance; a seventh joint has none.
+  auto json = modelToJson(m);
+  json.erase("compliance");
+  CHECK_THROWS_WITH(parseModel(json.dump(), "m.json"),
+                    Contains("covariance.parameters: a joint's twist (\"J<n>.compliance\") in a "
+                             "model without a \"compliance\" object"));
+  json = modelToJson(m);
+  json["covariance"]["parameters"].back() = "J7.compliance";
+  CHECK_THROWS_WITH(parseModel(json.dump(), "m.json"),
+                    Contains("unknown parameter \"J7.compliance\""));
+}
+
 TEST_CASE("error the fit found the model does not contain widens every predicted position error") {
   const Model nominal = puma560NominalModel();
   const Model fitted = calibrate(nominal, perturbed(9), 9);

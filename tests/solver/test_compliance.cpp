@@ -8,6 +8,9 @@
 #include <robocal/kinematics/kinematics.hpp>
 #include <robocal/robot/puma560.hpp>
 #include <robocal/solver/assessment.hpp>
+#include <robocal/solver/problem.hpp>
+
+#include <Eigen/Eigenvalues>
 
 #include <cmath>
 #include <random>
@@ -103,4 +106,60 @@ TEST_CASE("compliance: the twist of the loaded joints is identified, and only wh
     CHECK_FALSE(compliant.calibrated.compliance->twists());
     CHECK_THAT(c.summary(), Catch::Contains("the model stays rigid"));
   }
+}
+
+TEST_CASE("compliance: the identified twist's covariance joins the 54's as the batch fit's") {
+  Realism twisting = Realism::ideal();
+  twisting.compliance = Realism::typical(puma560NominalModel().compliance->load).compliance;
+  const TrueRobot truth{perturbed(1.0, 31), twisting};
+  const std::vector<Sample> samples = measured(truth, 0.02, 40);
+  AssessOptions with;
+  with.identify_compliance = true;
+  const FitAssessment fit = assessFit(puma560NominalModel(), samples, with);
+  REQUIRE(fit.compliance);
+  REQUIRE(fit.compliance->identified);
+  const Eigen::MatrixXd& joint = fit.compliance->covariance;
+  REQUIRE(joint.rows() == kParamCount + kJointCount);
+  // The batch fit of the free parameters and the twists together, linearised at the solution:
+  // sigma^2 ([J_p J_c]^T [J_p J_c])^-1, the twist's columns by differences of the residuals.
+  const Model& at = fit.calibrated;
+  Eigen::VectorXd r0;
+  Eigen::MatrixXd full;
+  evaluateProblem(at, toParams(at), samples, r0, &full);
+  const std::vector<int>& free = fit.fit.free_params;
+  const std::vector<int>& twisted = fit.compliance->joints;
+  const Eigen::Index p = static_cast<Eigen::Index>(free.size());
+  const Eigen::Index k = static_cast<Eigen::Index>(twisted.size());
+  Eigen::MatrixXd jac(full.rows(), p + k);
+  for (Eigen::Index a = 0; a < p; ++a) jac.col(a) = full.col(free[a]);
+  for (Eigen::Index c = 0; c < k; ++c) {
+    constexpr double kStep = 1e-5;  // deg/(N m)
+    Model plus = at, minus = at;
+    plus.compliance->deg_per_nm[twisted[c]] += kStep;
+    minus.compliance->deg_per_nm[twisted[c]] -= kStep;
+    Eigen::VectorXd rp, rm;
+    evaluateProblem(plus, toParams(plus), samples, rp, nullptr);
+    evaluateProblem(minus, toParams(minus), samples, rm, nullptr);
+    jac.col(p + c) = (rp - rm) / (2 * kStep);
+  }
+  const double s2 = fit.fit.sigma_mm * fit.fit.sigma_mm;
+  const Eigen::MatrixXd batch =
+      s2 * (jac.transpose() * jac).ldlt().solve(Eigen::MatrixXd::Identity(p + k, p + k));
+  std::vector<int> order = free;  // the batch's rows in the joint covariance's layout
+  for (int j : twisted) order.push_back(kParamCount + j);
+  double worst = 0;
+  for (Eigen::Index a = 0; a < p + k; ++a)
+    for (Eigen::Index b = 0; b < p + k; ++b) {
+      // Each entry against its scale, sqrt(var_a var_b): a correlation's error.
+      const double scale = std::sqrt(batch(a, a) * batch(b, b));
+      worst = std::max(worst, std::abs(joint(order[a], order[b]) - batch(a, b)) / scale);
+    }
+  INFO("largest difference " << worst << " of the entries' scale; twist sigmas "
+                             << std::sqrt(joint(kParamCount + 1, kParamCount + 1)) << ", "
+                             << std::sqrt(batch(p, p)));
+  CHECK(worst < 0.05);
+  // The 54's covariance grows by what the twist's uncertainty moves them: the fit's own is less.
+  const Eigen::MatrixXd grown = joint.topLeftCorner(kParamCount, kParamCount) - fit.fit.covariance;
+  CHECK(grown.selfadjointView<Eigen::Lower>().eigenvalues().minCoeff() > -1e-12 * grown.norm());
+  CHECK(grown.trace() > 0);
 }

@@ -155,7 +155,9 @@ struct Model {
   std::optional<ModelProvenance> provenance;
   // The calibration's parameter covariance (54 x 54, ParamVector units: mm, rad, gain), zero rows
   // and columns for parameters that were not estimated; files hold it in mm and deg
-  // (docs/model-format.md, "covariance"). Absent from nominal models; withParams drops it.
+  // (docs/model-format.md, "covariance"). When the fit identified the compliance, 60 x 60: each
+  // joint's twist (deg/(N m)) after the 54, at twistCovarianceIndex. Absent from nominal models;
+  // withParams drops it.
   std::optional<Eigen::MatrixXd> covariance;
   // Gravity compliance of the joints (docs/model-format.md, "compliance"): Kinematics(model)
   // evaluates the model at the readings twisted by it. Absent: a rigid arm (and older files).
@@ -211,6 +213,11 @@ static_assert(paramIndex(false, 0, "x") == 0 && paramIndex(false, 0, "z") == 2 &
               paramIndex(false, 0, "rx") == 5 && kLinkParamCount == 6);
 static_assert(paramIndex(true, 0, "offset") == jointParamIndex(0) &&
               paramIndex(true, 0, "gain") == jointParamIndex(0) + 1 && kJointParamCount == 2);
+
+// Model::covariance's row of joint j's (0-based) twist, when it has them: after the 54.
+constexpr int twistCovarianceIndex(int joint) {
+  return kParamCount + joint;
+}
 
 // The joint model, in one place: a joint turns to offset + gain * reading, the angle in radians
 // for the controller's reading in degrees (offset in radians, gain unitless, as in ParamVector).

@@ -9,7 +9,9 @@
 // Gauss-Newton step of those fits' residuals, whose Jacobian is taken by differences (one fit per
 // joint). The residual is nearly linear in c: two steps reach it. Its covariance is the fit's
 // sigma^2 (J^T J)^-1 with J that projected Jacobian: what the data say about c once the 54
-// parameters have taken what they can; the twist is kept only when it stands out of it. Math only.
+// parameters have taken what they can; the twist is kept only when it stands out of it. The
+// joint covariance of the 54 and the twist (for the predicted errors) adds what each twist moves
+// the 54 by: the 54's own at the fitted twist plus A C_c A^T, A = d params / d twist. Math only.
 #pragma once
 
 #include <robocal/solver/calibrate.hpp>
@@ -34,6 +36,11 @@ struct ComplianceEstimate {
   // cannot tell from noise would only move the arm's whole range by that noise.
   bool identified = false;
   double chi2 = 0, chi2_threshold = 0;
+  // When identified: the joint covariance of the 54 parameters and the six joints' twists, in
+  // Model::covariance's layout (kParamCount + kJointCount square; ParamVector units, then
+  // deg/(N m)): the twist's covariance, what it moves the 54 by (the fit absorbs part of a
+  // twist), and the 54's own at the fitted twist. Empty when not identified.
+  Eigen::MatrixXd covariance;
   // The largest twist over the samples' poses (deg) and its 1-sigma: what the compliance means.
   double largest_twist_deg = 0;
   double largest_twist_sigma_deg = 0;

@@ -142,7 +142,8 @@ HealthVerdict assessHealth(const Model& active, const std::vector<Sample>& check
 // "J2.offset +0.0500 deg" (4 decimals), "L3.x +0.210 mm" (3), "J4.gain +0.000500" (6).
 std::string parameterChangeText(int index, double change);
 
-// Whether the model carries a whole 54 x 54 parameter covariance, which the verdict whitens by.
+// Whether the model carries a whole parameter covariance, which the verdict whitens by: 54 x 54,
+// or 60 x 60 with the twists after them (Model::covariance), of which it uses the 54's block.
 bool hasParamCovariance(const Model& model);
 
 }  // namespace robocal
