@@ -49,8 +49,8 @@ std::string ComplianceEstimate::summary() const {
   if (identified) return out;
   std::snprintf(
       buf, sizeof buf,
-      "; not told from noise (chi-square %.1f, needs %.1f): the model stays rigid. Shells "
-      "that vary the arm's reach and height would show it",
+      "; not told from noise (chi-square %.1f, needs %.1f): the model stays rigid. A plan "
+      "designed for it would show it (robocal plan --compliance)",
       chi2, chi2_threshold);
   return out + buf;
 }
