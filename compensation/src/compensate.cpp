@@ -1,12 +1,13 @@
 #include <robocal/compensation/compensate.hpp>
 
 #include <robocal/formats/csv.hpp>
-#include <robocal/kinematics/gravity.hpp>
+#include <robocal/kinematics/twist.hpp>
 #include <robocal/kinematics/units.hpp>
 
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 
 namespace robocal {
 
@@ -66,6 +67,11 @@ Compensator::Compensator(const Model& nominal, const Model& calibrated, Compensa
           calibrated.provenance ? calibrated.provenance->approach_deg : 0.0)) {
   if (calibrated.covariance) {
     const Eigen::MatrixXd& c = *calibrated.covariance;
+    // The 54's, or the 54's and the twists' (which need the model's load): nothing else.
+    if (c.rows() != c.cols() || (c.rows() != kParamCount && !hasTwistRows(c)) ||
+        (hasTwistRows(c) && !calibrated.compliance))
+      throw std::invalid_argument(
+          "the calibrated model's covariance is neither 54 x 54 nor, with a compliance, 60 x 60");
     // The 54's, then the twists' when the fit identified the compliance (Model::covariance).
     for (int i = 0; i < c.rows(); ++i)
       if (c(i, i) > 0) estimated_.push_back(i);
@@ -90,18 +96,15 @@ double Compensator::predictedPositionError(const JointsDeg& q) const {
   PositionJacobian full;
   kin.ballPositionJacobian(q, options_.tool.translation(), full);
   Eigen::MatrixXd j(3, estimated_.size());
-  std::array<double, kJointCount> torque_nm{};
-  // A twist turns its joint by its torque (at the rigid pose, as Kinematics twists) times it.
-  if (!estimated_.empty() && estimated_.back() >= kParamCount)
-    torque_nm =
-        gravityTorqueNm(Kinematics(kin.params()).chainFrames(q), calibrated().compliance->load);
+  Eigen::Matrix<double, 3, kJointCount> twist = Eigen::Matrix<double, 3, kJointCount>::Zero();
+  if (hasTwistRows(*calibrated().covariance))
+    twist = twistColumns(full, rigidGravityTorqueNm(calibrated(), q));
   for (size_t k = 0; k < estimated_.size(); ++k) {
     const int i = estimated_[k];
     if (i < kParamCount)
       j.col(k) = full.col(i);
     else
-      j.col(k) =
-          full.col(jointParamIndex(i - kParamCount)) * torque_nm[i - kParamCount] * kRadPerDeg;
+      j.col(k) = twist.col(i - kParamCount);
   }
   // The error the fit found the model does not contain (ModelProvenance::unmodelled_mm), seen by
   // the bar along one direction: sqrt(3) times it in 3D, in quadrature with the parameters' part.

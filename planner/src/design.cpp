@@ -2,8 +2,8 @@
 
 #include "parallel.hpp"
 
-#include <robocal/kinematics/gravity.hpp>
 #include <robocal/kinematics/kinematics.hpp>
+#include <robocal/kinematics/twist.hpp>
 #include <robocal/solver/compliance_fit.hpp>
 #include <robocal/solver/identifiability.hpp>
 #include <robocal/solver/problem.hpp>
@@ -134,14 +134,9 @@ Eigen::MatrixXd WorkVolumeCriterion::columns(const Full& full, const JointsDeg& 
   const int n = static_cast<int>(identified_.size());
   for (int a = 0; a < n; ++a) out.col(a) = full.col(identified_[a]);
   if (compliance_joints_.empty()) return out;
-  // A twist of c deg/(N m) turns joint j by c tau_j deg, as its offset would (tau at the rigid
-  // pose, as Kinematics twists).
-  const std::array<double, kJointCount> torque_nm =
-      gravityTorqueNm(Kinematics(toParams(model_)).chainFrames(joints), model_.compliance->load);
-  for (size_t c = 0; c < compliance_joints_.size(); ++c) {
-    const int j = compliance_joints_[c];
-    out.col(n + static_cast<int>(c)) = full.col(jointParamIndex(j)) * torque_nm[j] * kRadPerDeg;
-  }
+  const auto twist = twistColumns(full, rigidGravityTorqueNm(model_, joints));
+  for (size_t c = 0; c < compliance_joints_.size(); ++c)
+    out.col(n + static_cast<int>(c)) = twist.col(compliance_joints_[c]);
   return out;
 }
 

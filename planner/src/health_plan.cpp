@@ -90,6 +90,8 @@ double designNoiseMm(const Model& model) {
 // parameters it identifies and zero for the rest (as solveCalibration fixes them).
 Eigen::MatrixXd calibrationCovarianceOverNoise(const Model& model, const CellConfig& calibration,
                                                double noise_mm) {
+  // The 54's block of a model that also carries a twist's: it overstates the offsets' uncertainty
+  // at the check's poses (the twist and what it moved them by cancel there), a cautious design.
   if (hasParamCovariance(model))
     return model.covariance->topLeftCorner(kParamCount, kParamCount) / (noise_mm * noise_mm);
   Eigen::MatrixXd out = Eigen::MatrixXd::Zero(kParamCount, kParamCount);

@@ -114,7 +114,10 @@ FitAssessment assessFit(const Model& nominal, std::vector<Sample> samples,
   a.calibrated = withParams(start, a.fit.params);
   a.calibrated.provenance.reset();  // the nominal's, if it had one, is not this model's
 
-  const std::vector<double> errors = predictedBallErrors(a.calibrated, a.fit.covariance, a.samples);
+  // With the twist's uncertainty when the fit kept one (the calibrated model's covariance).
+  const bool twist = a.compliance && a.compliance->identified;
+  const std::vector<double> errors = predictedBallErrors(
+      a.calibrated, twist ? a.compliance->covariance : a.fit.covariance, a.samples);
   double sum = 0;
   for (double e : errors) {
     sum += e * e;

@@ -1,6 +1,7 @@
 #include <robocal/solver/calibrate.hpp>
 
 #include <robocal/kinematics/kinematics.hpp>
+#include <robocal/kinematics/twist.hpp>
 #include <robocal/solver/problem.hpp>
 
 #include <Eigen/Cholesky>
@@ -336,9 +337,17 @@ std::vector<double> predictedBallErrors(const Model& model, const Eigen::MatrixX
   std::vector<double> out;
   out.reserve(samples.size());
   PositionJacobian g;
+  Eigen::Matrix<double, 3, twistCovarianceIndex(kJointCount)> with_twist;
   for (const Sample& s : samples) {
     kin.ballPositionJacobian(s.joints_deg, model.balls_mm[s.ball_index], g);
-    out.push_back(std::sqrt(std::max(0.0, (g * covariance * g.transpose()).trace())));
+    double variance = 0;
+    if (hasTwistRows(covariance)) {  // the twists' columns after the 54's
+      with_twist << g, twistColumns(g, rigidGravityTorqueNm(model, s.joints_deg));
+      variance = (with_twist * covariance * with_twist.transpose()).trace();
+    } else {
+      variance = (g * covariance * g.transpose()).trace();
+    }
+    out.push_back(std::sqrt(std::max(0.0, variance)));
   }
   return out;
 }

@@ -1,5 +1,6 @@
 #include <robocal/solver/health.hpp>
 
+#include <robocal/kinematics/twist.hpp>
 #include <robocal/solver/problem.hpp>
 
 #include <Eigen/Cholesky>
@@ -94,10 +95,21 @@ Named selectMoved(const Model& active, const std::vector<Sample>& samples,
   // columns whitened by L^-1, L L^T = I + J C J^T / noise^2 (identity without a covariance).
   const Eigen::Index n = out.jac.rows();
   Eigen::LLT<Eigen::MatrixXd> whitening(Eigen::MatrixXd::Identity(n, n));
-  if (hasParamCovariance(active))
+  if (hasParamCovariance(active)) {
+    // With the twists' columns when the model carries their covariance: a kept twist and what it
+    // moved the offsets by cancel at the shells' poses, which the 54's block alone would not see.
+    const Eigen::MatrixXd& c = *active.covariance;
+    Eigen::MatrixXd jac = out.jac;
+    if (hasTwistRows(c)) {
+      jac.conservativeResize(n, c.cols());
+      for (Eigen::Index i = 0; i < n; ++i)
+        jac.row(i).tail<kJointCount>() =
+            twistColumns(out.jac.row(i),
+                         rigidGravityTorqueNm(active, samples[static_cast<size_t>(i)].joints_deg));
+    }
     whitening.compute(Eigen::MatrixXd::Identity(n, n) +
-                      out.jac * active.covariance->topLeftCorner(kParamCount, kParamCount) *
-                          out.jac.transpose() / (noise * noise));
+                      jac * c * jac.transpose() / (noise * noise));
+  }
   std::vector<int>& selected = out.selected;
   while (static_cast<int>(selected.size()) < options.max_named) {
     const Eigen::MatrixXd jac = whitening.matrixL().solve(out.jac);
@@ -246,8 +258,8 @@ const char* healthReferenceName(HealthReference reference) {
 }
 
 bool hasParamCovariance(const Model& m) {
-  return m.covariance && m.covariance->rows() >= kParamCount &&
-         m.covariance->cols() == m.covariance->rows();
+  return m.covariance && m.covariance->cols() == m.covariance->rows() &&
+         (m.covariance->rows() == kParamCount || (hasTwistRows(*m.covariance) && m.compliance));
 }
 
 std::string parameterChangeText(int index, double change) {

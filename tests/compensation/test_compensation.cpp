@@ -493,7 +493,15 @@ TEST_CASE("an identified twist's covariance survives its file and widens the pre
     CHECK(Compensator(nominal, back).predictedOrientationError(q) >
           Compensator(nominal, twisted_only).predictedOrientationError(q));
   }
-  // A twist's covariance needs the model's compliance; a seventh joint has none.
+  // A twist's covariance needs the model's compliance, in memory as in a file; nothing but 54 or
+  // 60 rows is a covariance.
+  Model no_load = m;
+  no_load.compliance.reset();
+  CHECK_THROWS_AS(Compensator(nominal, no_load), std::invalid_argument);
+  Model odd = rigid;
+  odd.covariance = Eigen::MatrixXd::Identity(kParamCount + 1, kParamCount + 1);
+  CHECK_THROWS_AS(Compensator(nominal, odd), std::invalid_argument);
+  // A seventh joint has none.
   auto json = modelToJson(m);
   json.erase("compliance");
   CHECK_THROWS_WITH(parseModel(json.dump(), "m.json"),

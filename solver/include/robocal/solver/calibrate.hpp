@@ -114,7 +114,8 @@ SolveResult solveCalibration(const Model& start, const std::vector<Sample>& samp
 Eigen::VectorXd sampleResiduals(const Model& model, const std::vector<Sample>& samples);
 
 // Predicted 1-sigma ball-position error (sqrt of the trace of the 3x3 covariance) of the
-// calibrated model at each sample's pose, for the sample's ball.
+// calibrated model at each sample's pose, for the sample's ball; `covariance` of the 54, or of
+// the 54 and the twists (Model::covariance).
 std::vector<double> predictedBallErrors(const Model& model, const Eigen::MatrixXd& covariance,
                                         const std::vector<Sample>& samples);
 

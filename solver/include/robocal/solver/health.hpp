@@ -143,7 +143,7 @@ HealthVerdict assessHealth(const Model& active, const std::vector<Sample>& check
 std::string parameterChangeText(int index, double change);
 
 // Whether the model carries a whole parameter covariance, which the verdict whitens by: 54 x 54,
-// or 60 x 60 with the twists after them (Model::covariance), of which it uses the 54's block.
+// or 60 x 60 with the twists after them and the model's compliance (Model::covariance).
 bool hasParamCovariance(const Model& model);
 
 }  // namespace robocal

@@ -1,0 +1,36 @@
+// A joint's twist under gravity as a parameter (docs/model-format.md, "Covariance"): the twist per
+// N m of joint j turns it by its gravity torque times the twist, as its offset would, so a
+// twist's column of any Jacobian is the joint's offset column times its torque (deg to rad). The
+// torque is the one at the rigid pose, as Kinematics twists the readings. The design
+// (planner/design.hpp), the fit's covariance (solver/compliance_fit.hpp), the verdict's whitening
+// and the predicted errors (compensation/compensate.hpp) all take the twist's columns from here.
+// Math only.
+#pragma once
+
+#include <robocal/kinematics/kinematics.hpp>
+
+#include <array>
+
+namespace robocal {
+
+// Each joint's gravity torque (N m) at `readings` from the model's load at the rigid pose; zeros
+// for a model without a load.
+std::array<double, kJointCount> rigidGravityTorqueNm(const Model& model, const JointsDeg& readings);
+
+// The twists' columns (per deg/(N m)) of a Jacobian on the 54 parameters (any number of rows,
+// ParamVector units) at a pose whose torques are `torque_nm`: one column per joint.
+template <typename Derived>
+Eigen::Matrix<double, Derived::RowsAtCompileTime, kJointCount> twistColumns(
+    const Eigen::MatrixBase<Derived>& full, const std::array<double, kJointCount>& torque_nm) {
+  Eigen::Matrix<double, Derived::RowsAtCompileTime, kJointCount> out(full.rows(), kJointCount);
+  for (int j = 0; j < kJointCount; ++j)
+    out.col(j) = full.col(jointParamIndex(j)) * (torque_nm[j] * kRadPerDeg);
+  return out;
+}
+
+// Whether a covariance (Model::covariance) holds the twists' rows after the 54.
+inline bool hasTwistRows(const Eigen::MatrixXd& covariance) {
+  return covariance.rows() == twistCovarianceIndex(kJointCount);
+}
+
+}  // namespace robocal
