@@ -8,6 +8,7 @@
 #include <robocal/planner/health_plan.hpp>
 #include <robocal/planner/plan.hpp>
 #include <robocal/planner/plan_json.hpp>
+#include <robocal/planner/swaps.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -215,6 +216,7 @@ int run(const std::vector<std::string>& argv) {
         parts.total_s() / n, parts.dwell_s / n, parts.motion_s / n, parts.stopping_s / n,
         parts.stops / n, cell.motion.move_overhead_s, parts.swap_s / n);
   }
+  std::printf("operator: %s\n", describeOperatorSteps(operatorSteps(model, plan)).c_str());
   if (!check && whole_mm >= 0 && predicted_mm > 0)
     std::printf(
         "whole range: predicted RMS tool position error %.4f mm after the fit over %zu joint "
