@@ -8,6 +8,7 @@
 #include <robocal/formats/model_json.hpp>
 #include <robocal/formats/samples_csv.hpp>
 #include <robocal/planner/cell_json.hpp>
+#include <robocal/sim/true_robot_json.hpp>
 #include <robocal/solver/assessment.hpp>
 
 #include <cstdio>
@@ -39,8 +40,9 @@ no model and exits with 3, unless --allow-partial is given.
   --report DIR            write summary.html, report.json and the figures (SVG) to DIR
   --outlier-sigmas K      report samples beyond K robust sigmas                   [5]
   --drop-outliers         drop the reported outliers and refit (listed, never silent)
-  --truth FILE            a simulation's true model: report the ball-position error
-                          of the nominal and calibrated models against it
+  --truth FILE            a simulation's true robot (simulate --truth-out): report the
+                          ball-position error of the nominal and calibrated models
+                          against it, its backlash, compliance and warm-up included
   --cell FILE             judge the predicted accuracy over this cell file's work_volume
                           (docs/compensation.md)              [the reference cell's]
   --approach-deg D        the samples' points were each reached moving up by D deg in
@@ -159,6 +161,25 @@ std::string absolutePath(const std::string& path) {
   return std::filesystem::absolute(path).lexically_normal().string();
 }
 
+// Where the true robot of a simulation (robocal simulate --truth-out, cellsim) puts each sample's
+// ball: its readings turned by backlash (from below when the calibration approached so, else its
+// middle) and compliance, its links grown by the warm-up at the sample's minutes into the run.
+TrueBallMm trueBalls(TrueRobot truth, const std::vector<Sample>& samples, double approach_deg) {
+  double start_s = 0;
+  bool timed = false;
+  for (const Sample& s : samples)
+    if (s.time_s) {
+      start_s = timed ? std::min(start_s, *s.time_s) : *s.time_s;
+      timed = true;
+    }
+  const Approach approach = approach_deg > 0 ? kPositiveApproach : Approach{};
+  return [truth = std::move(truth), start_s, approach](const Sample& s) {
+    const Model model = s.time_s ? truth.modelAt((*s.time_s - start_s) / 60.0) : truth.model;
+    return Kinematics(model).ballPosition(truth.effectiveReadings(s.joints_deg, approach),
+                                          model.balls_mm[s.ball_index]);
+  };
+}
+
 int run(const std::vector<std::string>& argv) {
   const Args args(argv,
                   {"model", "out", "validate", "report", "outlier-sigmas", "truth",
@@ -198,7 +219,8 @@ int run(const std::vector<std::string>& argv) {
     if (held.samples.empty()) throw UsageError("the --validate file holds no samples");
     options.validation = std::move(held);
   }
-  if (args.has("truth")) options.truth = loadModelFile(args.get("truth", ""));
+  if (args.has("truth"))
+    options.truth = trueBalls(loadTruthFile(args.get("truth", "")), samples, origin.approach_deg);
 
   const CellConfig cell = args.has("cell") ? loadCellFile(args.get("cell", "")) : CellConfig{};
 

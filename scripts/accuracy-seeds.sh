@@ -12,12 +12,13 @@
 # ROBOCAL_SOLVE_ARGS: more options for robocal solve (e.g. --compliance).
 # ROBOCAL_PLAN_ARGS: more options for robocal plan (e.g. --time-budget-min 90).
 # ROBOCAL_NOISE_MM: the bar's reading noise (default the paper's 0.084 mm).
+# ROBOCAL_MODEL: another nominal model (e.g. with its chucks placed elsewhere on the table).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${ROBOCAL_BUILD_DIR:-$root/build}
 bin=$build/cli/robocal
 seeds=${1:-10}
-model=$root/config/puma560.json
+model=${ROBOCAL_MODEL:-$root/config/puma560.json}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 # shellcheck disable=SC2086  # the options are words

@@ -14,7 +14,9 @@
 # ROBOCAL_REFERENCE_EVERY_MIN; 0 for none) so that it measures the drift over the run.
 # ROBOCAL_PLAN_BUDGET_MIN=M runs an optimal plan of M minutes of cell time instead of the
 # cell's grid (docs/cell-time.md). ROBOCAL_ROBOT=rx160 calibrates a Staubli RX160 under V+
-# instead of the PUMA 560 under VAL II (docs/robots.md).
+# instead of the PUMA 560 under VAL II (docs/robots.md). ROBOCAL_MODEL: another nominal model of
+# that robot (e.g. its chucks placed apart: docs/accuracy.md, "Chucks placed apart").
+# ROBOCAL_SOLVE_ARGS: more options for the final fit (e.g. --compliance).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 # shellcheck source=sim-cell.sh
@@ -34,7 +36,7 @@ case $robot in
     exit 2
     ;;
 esac
-model=$root/config/$robot.json
+model=${ROBOCAL_MODEL:-$root/config/$robot.json}
 robot_cell=$root/config/cell.json
 [[ -f $root/config/cell-$robot.json ]] && robot_cell=$root/config/cell-$robot.json
 realism=${ROBOCAL_REALISM:-typical}
@@ -84,8 +86,9 @@ echo "simulated bar: $("$bin" cellsim "$out/cellsim.sock" status | grep -o 'brok
 echo "re-centring moves: $(grep -c '"recentre"' "$run_dir/events.jsonl" || true), re-plans: $(grep -c '"replan"' "$run_dir/events.jsonl" || true)"
 echo
 echo "== the calibrated model against the simulated truth (all samples of the run, refitted)"
+# shellcheck disable=SC2086  # the options are words
 "$bin" solve --model "$model" "$run_dir/samples.csv" --truth "$out/truth.json" \
-  --approach-deg "$(jq .motion.approach_deg "$cell")" \
+  --approach-deg "$(jq .motion.approach_deg "$cell")" ${ROBOCAL_SOLVE_ARGS:-} \
   --out "$out/calibrated.json" --report "$out/report"
 echo
 echo "== where the user works: the true robot commanded with nominal and with compensated joints"

@@ -313,9 +313,8 @@ Model calibratedModel(const FitAssessment& fit, const FitOrigin& origin,
   p.robocal_version = robocalVersion();
   p.warnings = fit.problems;
   m.provenance = std::move(p);
-  // What compensate's predicted errors come from: with the twist's when the fit identified it.
-  m.covariance = fit.compliance && fit.compliance->identified ? fit.compliance->covariance
-                                                              : fit.fit.covariance;
+  // What compensate's predicted errors come from: with the twist's when the fit looked for one.
+  m.covariance = calibratedCovariance(fit);
   return m;
 }
 

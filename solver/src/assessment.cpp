@@ -79,6 +79,11 @@ ShellTable shellTable(const std::vector<Sample>& samples, const Eigen::VectorXd&
   return table;
 }
 
+const Eigen::MatrixXd& calibratedCovariance(const FitAssessment& a) {
+  return a.compliance && a.compliance->covariance.size() > 0 ? a.compliance->covariance
+                                                             : a.fit.covariance;
+}
+
 FitAssessment assessFit(const Model& nominal, std::vector<Sample> samples,
                         const AssessOptions& options) {
   FitAssessment a;
@@ -114,10 +119,9 @@ FitAssessment assessFit(const Model& nominal, std::vector<Sample> samples,
   a.calibrated = withParams(start, a.fit.params);
   a.calibrated.provenance.reset();  // the nominal's, if it had one, is not this model's
 
-  // With the twist's uncertainty when the fit kept one (the calibrated model's covariance).
-  const bool twist = a.compliance && a.compliance->identified;
-  const std::vector<double> errors = predictedBallErrors(
-      a.calibrated, twist ? a.compliance->covariance : a.fit.covariance, a.samples);
+  // With the twist's uncertainty when the fit looked for one (the calibrated model's covariance).
+  const std::vector<double> errors =
+      predictedBallErrors(a.calibrated, calibratedCovariance(a), a.samples);
   double sum = 0;
   for (double e : errors) {
     sum += e * e;
@@ -142,7 +146,7 @@ FitAssessment assessFit(const Model& nominal, std::vector<Sample> samples,
     a.validation = std::move(v);
   }
   if (options.truth)
-    a.truth = compareWithTruth(nominal, a.calibrated, *options.truth,
+    a.truth = compareWithTruth(nominal, a.calibrated, options.truth,
                                a.validation ? a.validation->samples : a.samples);
   return a;
 }

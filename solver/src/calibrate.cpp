@@ -397,16 +397,17 @@ std::vector<Outlier> findOutliers(const Eigen::VectorXd& residuals, double k) {
 
 namespace robocal {
 
-TruthComparison compareWithTruth(const Model& nominal, const Model& calibrated, const Model& truth,
+TruthComparison compareWithTruth(const Model& nominal, const Model& calibrated,
+                                 const TrueBallMm& true_ball_mm,
                                  const std::vector<Sample>& samples) {
-  const Kinematics nominal_kin(nominal), calibrated_kin(calibrated), truth_kin(truth);
+  const Kinematics nominal_kin(nominal), calibrated_kin(calibrated);
   TruthComparison out;
   double nominal_sum = 0, calibrated_sum = 0;
   for (const Sample& s : samples) {
-    const Eigen::Vector3d& ball = truth.balls_mm[s.ball_index];
-    const Eigen::Vector3d p = truth_kin.ballPosition(s.joints_deg, ball);
-    nominal_sum += (nominal_kin.ballPosition(s.joints_deg, ball) - p).squaredNorm();
-    const double e = (calibrated_kin.ballPosition(s.joints_deg, ball) - p).norm();
+    const int b = s.ball_index;
+    const Eigen::Vector3d p = true_ball_mm(s);
+    nominal_sum += (nominal_kin.ballPosition(s.joints_deg, nominal.balls_mm[b]) - p).squaredNorm();
+    const double e = (calibrated_kin.ballPosition(s.joints_deg, calibrated.balls_mm[b]) - p).norm();
     calibrated_sum += e * e;
     out.calibrated_max_mm = std::max(out.calibrated_max_mm, e);
     ++out.poses;

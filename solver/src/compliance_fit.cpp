@@ -37,7 +37,7 @@ std::array<double, kJointCount> rmsTorques(const std::vector<std::array<double, 
 std::string ComplianceEstimate::summary() const {
   if (joints.empty()) return "no joint carries the arm's weight at these poses: none identified";
   std::string out;
-  char buf[160];
+  char buf[256];
   for (int j : joints) {
     std::snprintf(buf, sizeof buf, "%sjoint %d %.3g +/- %.2g", out.empty() ? "" : ", ", j + 1,
                   fitted_deg_per_nm[j], sigma_deg_per_nm[j]);
@@ -50,7 +50,8 @@ std::string ComplianceEstimate::summary() const {
   std::snprintf(
       buf, sizeof buf,
       "; not told from noise (chi-square %.1f, needs %.1f): the model stays rigid. A plan "
-      "designed for it would show it (robocal plan --compliance)",
+      "designed for it (robocal plan --compliance) on chucks placed apart would show it "
+      "(docs/accuracy.md, \"Chucks placed apart\")",
       chi2, chi2_threshold);
   return out + buf;
 }
@@ -124,21 +125,21 @@ SolveResult solveWithCompliance(const Model& start, const std::vector<Sample>& s
     out.identified =
         out.chi2 > out.chi2_threshold &&
         std::all_of(twist.begin(), twist.end(), [](double c) { return std::abs(c) <= 0.1; });
-    // The joint covariance (the header): the 54's own at the fitted twist, and the twist's
-    // carried into them by what it moves them.
-    if (out.identified) {
-      const int n = kParamCount;
-      out.covariance = Eigen::MatrixXd::Zero(twistCovarianceIndex(kJointCount),
-                                             twistCovarianceIndex(kJointCount));
-      const Eigen::MatrixXd moved = absorbed * cov;  // Cov(params, twist)
-      out.covariance.topLeftCorner(n, n) = fit.covariance + moved * absorbed.transpose();
-      for (Eigen::Index a = 0; a < k; ++a) {
-        const int ja = twistCovarianceIndex(out.joints[a]);
-        out.covariance.block(0, ja, n, 1) = moved.col(a);
-        out.covariance.block(ja, 0, 1, n) = moved.col(a).transpose();
-        for (Eigen::Index b = 0; b < k; ++b)
-          out.covariance(ja, twistCovarianceIndex(out.joints[b])) = cov(a, b);
-      }
+    // The joint covariance (the header): the 54's own at the twist the model takes (the fitted
+    // one when kept, the start's when not), and the twist's carried into them by what it moves
+    // them. Kept or not, the twist is known only to its uncertainty.
+    const int n = kParamCount;
+    out.covariance =
+        Eigen::MatrixXd::Zero(twistCovarianceIndex(kJointCount), twistCovarianceIndex(kJointCount));
+    const Eigen::MatrixXd moved = absorbed * cov;  // Cov(params, twist)
+    out.covariance.topLeftCorner(n, n) =
+        (out.identified ? fit : at_start).covariance + moved * absorbed.transpose();
+    for (Eigen::Index a = 0; a < k; ++a) {
+      const int ja = twistCovarianceIndex(out.joints[a]);
+      out.covariance.block(0, ja, n, 1) = moved.col(a);
+      out.covariance.block(ja, 0, 1, n) = moved.col(a).transpose();
+      for (Eigen::Index b = 0; b < k; ++b)
+        out.covariance(ja, twistCovarianceIndex(out.joints[b])) = cov(a, b);
     }
     // The largest twist over the samples and its sigma (the twist's gradient in c is the torque).
     for (const auto& t : tau) {

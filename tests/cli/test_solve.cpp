@@ -306,3 +306,29 @@ TEST_CASE("the calibrated model says where it came from") {
   CHECK_FALSE(p.robocal_version.empty());
   CHECK(p.warnings.empty());
 }
+
+TEST_CASE("robocal solve --truth judges against the true robot, backlash and compliance included") {
+  TempDir dir;
+  REQUIRE(runRobocal("simulate --model " + kModel +
+                     " --seed 5 --points-per-shell 60 --realism typical --noise-mm 0.01 --out " +
+                     (dir / "s.csv") + " --truth-out " + (dir / "t.json"))
+              .exit_code == 0);
+  // The same truth's geometry alone, as solve judged until 2026-12-07.
+  nlohmann::json rigid = nlohmann::json::parse(std::ifstream(dir / "t.json"));
+  REQUIRE(rigid.contains("realism"));
+  rigid.erase("realism");
+  std::ofstream(dir / "rigid.json") << rigid.dump();
+  const auto judged = [&](const std::string& truth) {
+    const auto r = runRobocal("solve --model " + kModel + " " + (dir / "s.csv") + " --truth " +
+                              (dir / truth) + " --json --allow-partial");
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    return nlohmann::json::parse(r.output)["truth_calibrated_rms_mm"].get<double>();
+  };
+  const double true_robot_mm = judged("t.json");
+  const double geometry_mm = judged("rigid.json");
+  INFO("against the true robot " << true_robot_mm << " mm, its geometry alone " << geometry_mm);
+  // The fit absorbs the twist into the offsets: against the geometry alone it looks far off.
+  CHECK(true_robot_mm < 0.12);
+  CHECK(geometry_mm > 2 * true_robot_mm);
+}

@@ -103,6 +103,39 @@ TEST_CASE("compliance: the twist of the loaded joints is identified, and only wh
     CHECK(c.compliance.deg_per_nm == std::array<double, kJointCount>{});
     CHECK_FALSE(compliant.calibrated.compliance->twists());
     CHECK_THAT(c.summary(), Catch::Contains("the model stays rigid"));
+    // Not kept, but known only to its uncertainty: the covariance carries it, and the predicted
+    // errors grow by it.
+    REQUIRE(c.covariance.rows() == twistCovarianceIndex(kJointCount));
+    for (int j : c.joints) {
+      const int t = twistCovarianceIndex(j);
+      CHECK(std::sqrt(c.covariance(t, t)) == Approx(c.sigma_deg_per_nm[j]));
+    }
+    CHECK(calibratedCovariance(compliant).rows() == twistCovarianceIndex(kJointCount));
+    const FitAssessment rigid = assessFit(nominal, compliant.samples);
+    CHECK(compliant.fit.params == rigid.fit.params);
+    CHECK(compliant.predicted_ball_error_rms_mm > rigid.predicted_ball_error_rms_mm);
+    // Most where the shells are not: over the arm's whole range.
+    std::vector<Sample> whole;
+    std::mt19937_64 rng(3);
+    for (int i = 0; i < 200; ++i) {
+      JointsDeg q;
+      for (int j = 0; j < kJointCount; ++j)
+        q[j] = std::uniform_real_distribution<double>(nominal.joints[j].min_deg,
+                                                      nominal.joints[j].max_deg)(rng);
+      whole.push_back(makeSample(1, {0, 0}, 0, 0, 0, q, 0));
+    }
+    const auto rms = [](const std::vector<double>& e) {
+      double sum = 0;
+      for (double x : e) sum += x * x;
+      return std::sqrt(sum / e.size());
+    };
+    const double with_twist_mm =
+        rms(predictedBallErrors(compliant.calibrated, calibratedCovariance(compliant), whole));
+    const double rigid_mm =
+        rms(predictedBallErrors(rigid.calibrated, calibratedCovariance(rigid), whole));
+    INFO("whole range predicted: " << rigid_mm << " mm rigid, " << with_twist_mm
+                                   << " mm with the twist's uncertainty");
+    CHECK(with_twist_mm > 1.4 * rigid_mm);
   }
 }
 

@@ -38,8 +38,8 @@ struct AssessOptions {
   double outlier_sigmas = 5.0;  // samples beyond this many robust sigmas are reported
   bool drop_outliers = false;   // and, when set, dropped before a second fit
   std::optional<HeldOutSamples> validation;
-  std::optional<Model> truth;  // a simulation's true robot
-  VerdictLimits verdict;       // what makes the fit unusable (verdict.hpp)
+  TrueBallMm truth;       // a simulation's true robot: where it puts each sample's ball; or none
+  VerdictLimits verdict;  // what makes the fit unusable (verdict.hpp)
   // Identify the gravity compliance of the loaded joints with the 54 parameters, from the
   // nominal's load (compliance_fit.hpp); the nominal must carry one.
   bool identify_compliance = false;
@@ -121,5 +121,9 @@ struct FitAssessment {
 // samples that name one.
 FitAssessment assessFit(const Model& nominal, std::vector<Sample> samples,
                         const AssessOptions& options = {});
+
+// The calibrated model's covariance: the 54's and the loaded joints' twists when the fit looked
+// for a twist (kept or not: compliance_fit.hpp), else the 54's.
+const Eigen::MatrixXd& calibratedCovariance(const FitAssessment& a);
 
 }  // namespace robocal

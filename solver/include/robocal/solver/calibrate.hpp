@@ -14,6 +14,7 @@
 #include <robocal/solver/identifiability.hpp>
 
 #include <array>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -144,7 +145,12 @@ struct TruthComparison {
   double calibrated_rms_mm = 0;
   double calibrated_max_mm = 0;
 };
-TruthComparison compareWithTruth(const Model& nominal, const Model& calibrated, const Model& truth,
+// Where the true robot puts a sample's ball (mm, global frame): its geometry and what a real arm
+// adds (backlash, compliance, warm-up: sim/true_robot.hpp), so that a model is not judged against
+// a truth without what the model was fitted to absorb.
+using TrueBallMm = std::function<Eigen::Vector3d(const Sample&)>;
+TruthComparison compareWithTruth(const Model& nominal, const Model& calibrated,
+                                 const TrueBallMm& true_ball_mm,
                                  const std::vector<Sample>& samples);
 
 }  // namespace robocal

@@ -36,10 +36,13 @@ struct ComplianceEstimate {
   // cannot tell from noise would only move the arm's whole range by that noise.
   bool identified = false;
   double chi2 = 0, chi2_threshold = 0;
-  // When identified: the joint covariance of the 54 parameters and the six joints' twists, in
-  // Model::covariance's layout (kParamCount + kJointCount square; ParamVector units, then
-  // deg/(N m)): the twist's covariance, what it moves the 54 by (the fit absorbs part of a
-  // twist), and the 54's own at the fitted twist. Empty when not identified.
+  // The joint covariance of the 54 parameters and the six joints' twists, in Model::covariance's
+  // layout (kParamCount + kJointCount square; ParamVector units, then deg/(N m)): the twist's
+  // covariance, what it moves the 54 by (the fit absorbs part of a twist), and the 54's own at
+  // the twist the model takes. Also when the twist is not kept: a twist the data cannot tell
+  // from noise may still be there up to its uncertainty, and the predicted errors count it (a
+  // rigid prediction of the arm's whole range is then 3-5x short of the truth:
+  // docs/accuracy.md). Empty when no joint carries the weight.
   Eigen::MatrixXd covariance;
   // The largest twist over the samples' poses (deg) and its 1-sigma: what the compliance means.
   double largest_twist_deg = 0;
