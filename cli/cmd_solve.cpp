@@ -13,6 +13,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <nlohmann/json.hpp>
 
 namespace robocal::cli {
@@ -163,18 +164,18 @@ std::string absolutePath(const std::string& path) {
 
 // Where the true robot of a simulation (robocal simulate --truth-out, cellsim) puts each sample's
 // ball: its readings turned by backlash (from below when the calibration approached so, else its
-// middle) and compliance, its links grown by the warm-up at the sample's minutes into the run.
-TrueBallMm trueBalls(TrueRobot truth, const std::vector<Sample>& samples, double approach_deg) {
-  double start_s = 0;
-  bool timed = false;
-  for (const Sample& s : samples)
-    if (s.time_s) {
-      start_s = timed ? std::min(start_s, *s.time_s) : *s.time_s;
-      timed = true;
-    }
+// middle) and compliance, its links grown by the warm-up. A sample's time says how warm: simulate
+// stamps seconds since its start, on the truth's own clock; a robocald run stamps Unix time while
+// cellsim warms on its scaled clock (100x in the main job: warm within a minute), which the
+// samples do not carry, so those are judged warm. Untimed samples: the truth as filed.
+TrueBallMm trueBalls(TrueRobot truth, double approach_deg) {
   const Approach approach = approach_deg > 0 ? kPositiveApproach : Approach{};
-  return [truth = std::move(truth), start_s, approach](const Sample& s) {
-    const Model model = s.time_s ? truth.modelAt((*s.time_s - start_s) / 60.0) : truth.model;
+  return [truth = std::move(truth), approach](const Sample& s) {
+    constexpr double kUnixTimeFromS = 1e8;  // 3 years: no simulated run is that long
+    const Model model = !s.time_s ? truth.model
+                        : *s.time_s < kUnixTimeFromS
+                            ? truth.modelAt(*s.time_s / 60.0)
+                            : truth.modelAt(std::numeric_limits<double>::infinity());
     return Kinematics(model).ballPosition(truth.effectiveReadings(s.joints_deg, approach),
                                           model.balls_mm[s.ball_index]);
   };
@@ -220,7 +221,7 @@ int run(const std::vector<std::string>& argv) {
     options.validation = std::move(held);
   }
   if (args.has("truth"))
-    options.truth = trueBalls(loadTruthFile(args.get("truth", "")), samples, origin.approach_deg);
+    options.truth = trueBalls(loadTruthFile(args.get("truth", "")), origin.approach_deg);
 
   const CellConfig cell = args.has("cell") ? loadCellFile(args.get("cell", "")) : CellConfig{};
 

@@ -72,7 +72,7 @@ Compensator::Compensator(const Model& nominal, const Model& calibrated, Compensa
         (hasTwistRows(c) && !calibrated.compliance))
       throw std::invalid_argument(
           "the calibrated model's covariance is neither 54 x 54 nor, with a compliance, 60 x 60");
-    // The 54's, then the twists' when the fit identified the compliance (Model::covariance).
+    // The 54's, then the twists' when the fit looked for the compliance (Model::covariance).
     for (int i = 0; i < c.rows(); ++i)
       if (c(i, i) > 0) estimated_.push_back(i);
     const int n = static_cast<int>(estimated_.size());

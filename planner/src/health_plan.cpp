@@ -1,6 +1,7 @@
 #include <robocal/planner/health_plan.hpp>
 
 #include <robocal/kinematics/kinematics.hpp>
+#include <robocal/kinematics/twist.hpp>
 #include <robocal/kinematics/units.hpp>
 #include <robocal/planner/design.hpp>
 #include <robocal/solver/health.hpp>
@@ -90,10 +91,15 @@ double designNoiseMm(const Model& model) {
 // parameters it identifies and zero for the rest (as solveCalibration fixes them).
 Eigen::MatrixXd calibrationCovarianceOverNoise(const Model& model, const CellConfig& calibration,
                                                double noise_mm) {
-  // The 54's block of a model that also carries a twist's: it overstates the offsets' uncertainty
-  // at the check's poses (the twist and what it moved them by cancel there), a cautious design.
-  if (hasParamCovariance(model))
-    return model.covariance->topLeftCorner(kParamCount, kParamCount) / (noise_mm * noise_mm);
+  // The 54's block of a model that takes a twist: it overstates the offsets' uncertainty at the
+  // check's poses (the twist and what it moved them by cancel there), a cautious design. Of one
+  // that does not, the 54's at its known twist, as the verdict judges it.
+  if (hasParamCovariance(model)) {
+    const bool twists = model.compliance && model.compliance->twists();
+    return (twists ? Eigen::MatrixXd(model.covariance->topLeftCorner(kParamCount, kParamCount))
+                   : covarianceAtKnownTwist(*model.covariance)) /
+           (noise_mm * noise_mm);
+  }
   Eigen::MatrixXd out = Eigen::MatrixXd::Zero(kParamCount, kParamCount);
   const ShellPlanner planner(model, calibration);
   std::vector<Sample> samples;

@@ -60,7 +60,8 @@ TEST_CASE("the shipped cells order their connections for two walks an extension"
     INFO(cell_file);
     const CellConfig cell = loadCellFile(std::string(ROBOCAL_SOURCE_DIR) + cell_file);
     const Model model = loadModelFile(std::string(ROBOCAL_SOURCE_DIR) + model_file);
-    const Plan plan = shellsOf(cell.connections, cell.bar.extension_lengths_mm);
+    const Plan plan = planCell(model, cell);  // the order the daemon runs
+    REQUIRE(plan.shells.size() == 9 * cell.bar.extension_lengths_mm.size());
     const OperatorSteps steps = operatorSteps(model, plan);
     // Each chuck's three balls together: two walks an extension and one between them.
     const int extensions = static_cast<int>(cell.bar.extension_lengths_mm.size());

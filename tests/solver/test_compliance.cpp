@@ -6,6 +6,7 @@
 #include "fit_fixtures.hpp"
 
 #include <robocal/kinematics/kinematics.hpp>
+#include <robocal/kinematics/twist.hpp>
 #include <robocal/robot/puma560.hpp>
 #include <robocal/solver/assessment.hpp>
 #include <robocal/solver/problem.hpp>
@@ -113,6 +114,11 @@ TEST_CASE("compliance: the twist of the loaded joints is identified, and only wh
     CHECK(calibratedCovariance(compliant).rows() == twistCovarianceIndex(kJointCount));
     const FitAssessment rigid = assessFit(nominal, compliant.samples);
     CHECK(compliant.fit.params == rigid.fit.params);
+    // Taken as known, the twist gives back the rigid fit's covariance (the health check's).
+    const Eigen::MatrixXd known = covarianceAtKnownTwist(c.covariance);
+    CHECK((known - rigid.fit.covariance).norm() < 1e-6 * rigid.fit.covariance.norm());
+    CHECK((c.covariance.topLeftCorner(kParamCount, kParamCount) - rigid.fit.covariance).norm() >
+          1e-3 * rigid.fit.covariance.norm());
     CHECK(compliant.predicted_ball_error_rms_mm > rigid.predicted_ball_error_rms_mm);
     // Most where the shells are not: over the arm's whole range.
     std::vector<Sample> whole;

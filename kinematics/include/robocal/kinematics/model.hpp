@@ -155,7 +155,7 @@ struct Model {
   std::optional<ModelProvenance> provenance;
   // The calibration's parameter covariance (54 x 54, ParamVector units: mm, rad, gain), zero rows
   // and columns for parameters that were not estimated; files hold it in mm and deg
-  // (docs/model-format.md, "covariance"). When the fit identified the compliance, 60 x 60: each
+  // (docs/model-format.md, "covariance"). When the fit looked for the compliance, 60 x 60: each
   // joint's twist (deg/(N m)) after the 54, at twistCovarianceIndex. Absent from nominal models;
   // withParams drops it.
   std::optional<Eigen::MatrixXd> covariance;

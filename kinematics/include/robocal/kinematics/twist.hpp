@@ -33,4 +33,10 @@ inline bool hasTwistRows(const Eigen::MatrixXd& covariance) {
   return covariance.rows() == twistCovarianceIndex(kJointCount);
 }
 
+// The 54's covariance with the twist taken as known: for a covariance with the twists' rows, the
+// 54's block conditioned on the twists it holds (C_pp - C_pc C_cc^-1 C_cp, the covariance of the
+// fit at a fixed twist); the 54's block of any other. A model that keeps its start's twist (one
+// not told from noise) is judged by it where a change since the calibration is the question.
+Eigen::MatrixXd covarianceAtKnownTwist(const Eigen::MatrixXd& covariance);
+
 }  // namespace robocal

@@ -41,7 +41,7 @@ struct ComplianceEstimate {
   // covariance, what it moves the 54 by (the fit absorbs part of a twist), and the 54's own at
   // the twist the model takes. Also when the twist is not kept: a twist the data cannot tell
   // from noise may still be there up to its uncertainty, and the predicted errors count it (a
-  // rigid prediction of the arm's whole range is then 3-5x short of the truth:
+  // rigid prediction of the arm's whole range is then 2-5x short of the truth:
   // docs/accuracy.md). Empty when no joint carries the weight.
   Eigen::MatrixXd covariance;
   // The largest twist over the samples' poses (deg) and its 1-sigma: what the compliance means.
