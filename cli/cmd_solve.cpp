@@ -170,14 +170,15 @@ std::string absolutePath(const std::string& path) {
 // samples do not carry, so those are judged warm. Untimed samples: the truth as filed.
 TrueBallMm trueBalls(TrueRobot truth, double approach_deg) {
   const Approach approach = approach_deg > 0 ? kPositiveApproach : Approach{};
-  return [truth = std::move(truth), approach](const Sample& s) {
+  const Kinematics as_filed(truth.model);
+  const Kinematics warm(truth.modelAt(std::numeric_limits<double>::infinity()));
+  return [truth = std::move(truth), approach, as_filed, warm](const Sample& s) {
     constexpr double kUnixTimeFromS = 1e8;  // 3 years: no simulated run is that long
-    const Model model = !s.time_s ? truth.model
-                        : *s.time_s < kUnixTimeFromS
-                            ? truth.modelAt(*s.time_s / 60.0)
-                            : truth.modelAt(std::numeric_limits<double>::infinity());
-    return Kinematics(model).ballPosition(truth.effectiveReadings(s.joints_deg, approach),
-                                          model.balls_mm[s.ball_index]);
+    const JointsDeg q = truth.effectiveReadings(s.joints_deg, approach);
+    const Eigen::Vector3d& ball = truth.model.balls_mm[s.ball_index];
+    if (!s.time_s) return as_filed.ballPosition(q, ball);
+    if (*s.time_s >= kUnixTimeFromS) return warm.ballPosition(q, ball);
+    return Kinematics(truth.modelAt(*s.time_s / 60.0)).ballPosition(q, ball);
   };
 }
 

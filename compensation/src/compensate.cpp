@@ -98,7 +98,7 @@ double Compensator::predictedPositionError(const JointsDeg& q) const {
   Eigen::MatrixXd j(3, estimated_.size());
   Eigen::Matrix<double, 3, kJointCount> twist = Eigen::Matrix<double, 3, kJointCount>::Zero();
   if (hasTwistRows(*calibrated().covariance))
-    twist = twistColumns(full, rigidGravityTorqueNm(calibrated(), q));
+    twist = twistColumns(full, RigidGravityTorque(calibrated())(q));
   for (size_t k = 0; k < estimated_.size(); ++k) {
     const int i = estimated_[k];
     if (i < kParamCount)

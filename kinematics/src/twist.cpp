@@ -1,14 +1,16 @@
-#include <robocal/kinematics/gravity.hpp>
 #include <robocal/kinematics/twist.hpp>
 
 #include <vector>
 
 namespace robocal {
 
-std::array<double, kJointCount> rigidGravityTorqueNm(const Model& model,
-                                                     const JointsDeg& readings) {
-  if (!model.compliance) return {};
-  return gravityTorqueNm(Kinematics(toParams(model)).chainFrames(readings), model.compliance->load);
+RigidGravityTorque::RigidGravityTorque(const Model& model) : rigid_(toParams(model)) {
+  if (model.compliance) load_ = model.compliance->load;
+}
+
+std::array<double, kJointCount> RigidGravityTorque::operator()(const JointsDeg& readings) const {
+  if (!load_) return {};
+  return gravityTorqueNm(rigid_.chainFrames(readings), *load_);
 }
 
 Eigen::MatrixXd covarianceAtKnownTwist(const Eigen::MatrixXd& covariance) {

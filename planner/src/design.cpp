@@ -134,7 +134,7 @@ Eigen::MatrixXd WorkVolumeCriterion::columns(const Full& full, const JointsDeg& 
   const int n = static_cast<int>(identified_.size());
   for (int a = 0; a < n; ++a) out.col(a) = full.col(identified_[a]);
   if (compliance_joints_.empty()) return out;
-  const auto twist = twistColumns(full, rigidGravityTorqueNm(model_, joints));
+  const auto twist = twistColumns(full, RigidGravityTorque(model_)(joints));
   for (size_t c = 0; c < compliance_joints_.size(); ++c)
     out.col(n + static_cast<int>(c)) = twist.col(compliance_joints_[c]);
   return out;

@@ -338,11 +338,12 @@ std::vector<double> predictedBallErrors(const Model& model, const Eigen::MatrixX
   out.reserve(samples.size());
   PositionJacobian g;
   Eigen::Matrix<double, 3, twistCovarianceIndex(kJointCount)> with_twist;
+  const RigidGravityTorque torque_nm(model);
   for (const Sample& s : samples) {
     kin.ballPositionJacobian(s.joints_deg, model.balls_mm[s.ball_index], g);
     double variance = 0;
     if (hasTwistRows(covariance)) {  // the twists' columns after the 54's
-      with_twist << g, twistColumns(g, rigidGravityTorqueNm(model, s.joints_deg));
+      with_twist << g, twistColumns(g, torque_nm(s.joints_deg));
       variance = (with_twist * covariance * with_twist.transpose()).trace();
     } else {
       variance = (g * covariance * g.transpose()).trace();

@@ -1,7 +1,7 @@
 #include <robocal/solver/compliance_fit.hpp>
 
-#include <robocal/kinematics/gravity.hpp>
 #include <robocal/kinematics/kinematics.hpp>
+#include <robocal/kinematics/twist.hpp>
 #include <robocal/solver/adequacy.hpp>
 
 #include <Eigen/Dense>
@@ -16,11 +16,10 @@ namespace {
 // Each sample's gravity torque (N m) at the start model's rigid pose.
 std::vector<std::array<double, kJointCount>> torques(const Model& start,
                                                      const std::vector<Sample>& samples) {
-  const Kinematics rigid(toParams(start));
+  const RigidGravityTorque torque_nm(start);
   std::vector<std::array<double, kJointCount>> out;
   out.reserve(samples.size());
-  for (const Sample& s : samples)
-    out.push_back(gravityTorqueNm(rigid.chainFrames(s.joints_deg), start.compliance->load));
+  for (const Sample& s : samples) out.push_back(torque_nm(s.joints_deg));
   return out;
 }
 

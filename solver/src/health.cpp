@@ -107,10 +107,10 @@ Named selectMoved(const Model& active, const std::vector<Sample>& samples,
     Eigen::MatrixXd jac = out.jac;
     if (hasTwistRows(c)) {
       jac.conservativeResize(n, c.cols());
+      const RigidGravityTorque torque_nm(active);
       for (Eigen::Index i = 0; i < n; ++i)
         jac.row(i).tail<kJointCount>() =
-            twistColumns(out.jac.row(i),
-                         rigidGravityTorqueNm(active, samples[static_cast<size_t>(i)].joints_deg));
+            twistColumns(out.jac.row(i), torque_nm(samples[static_cast<size_t>(i)].joints_deg));
     }
     whitening.compute(Eigen::MatrixXd::Identity(n, n) +
                       jac * c * jac.transpose() / (noise * noise));

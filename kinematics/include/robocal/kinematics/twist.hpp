@@ -7,15 +7,26 @@
 // Math only.
 #pragma once
 
+#include <robocal/kinematics/gravity.hpp>
 #include <robocal/kinematics/kinematics.hpp>
 
 #include <array>
+#include <optional>
 
 namespace robocal {
 
-// Each joint's gravity torque (N m) at `readings` from the model's load at the rigid pose; zeros
-// for a model without a load.
-std::array<double, kJointCount> rigidGravityTorqueNm(const Model& model, const JointsDeg& readings);
+// Each joint's gravity torque (N m) from a model's load at the rigid pose of given readings;
+// zeros for a model without a load. The rigid chain is built once, for the many poses of a fit,
+// a check or a design.
+class RigidGravityTorque {
+ public:
+  explicit RigidGravityTorque(const Model& model);
+  std::array<double, kJointCount> operator()(const JointsDeg& readings) const;
+
+ private:
+  Kinematics rigid_;
+  std::optional<GravityLoad> load_;
+};
 
 // The twists' columns (per deg/(N m)) of a Jacobian on the 54 parameters (any number of rows,
 // ParamVector units) at a pose whose torques are `torque_nm`: one column per joint.
