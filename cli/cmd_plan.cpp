@@ -212,9 +212,12 @@ int run(const std::vector<std::string>& argv) {
     const double n = parts.points;
     std::printf(
         "cell time a point: %.2f s = dwell %.2f + moves %.2f + stops %.2f (%.1f stops a point: "
-        "the point, its vias and pre-points, %.1f s each) + bar swaps %.2f\n",
+        "%s, %.1f s each) + bar swaps %.2f\n",
         parts.total_s() / n, parts.dwell_s / n, parts.motion_s / n, parts.stopping_s / n,
-        parts.stops / n, cell.motion.move_overhead_s, parts.swap_s / n);
+        parts.stops / n,
+        cell.motion.through_vias ? "the point; its vias passed through"
+                                 : "the point, its vias and pre-points",
+        cell.motion.move_overhead_s, parts.swap_s / n);
   }
   std::printf("operator: %s\n", describeOperatorSteps(operatorSteps(model, plan)).c_str());
   if (!check && whole_mm >= 0 && predicted_mm > 0)

@@ -17,6 +17,8 @@
 # instead of the PUMA 560 under VAL II (docs/robots.md). ROBOCAL_MODEL: another nominal model of
 # that robot (e.g. its chucks placed apart: docs/accuracy.md, "Chucks placed apart").
 # ROBOCAL_SOLVE_ARGS: more options for the final fit (e.g. --compliance).
+# ROBOCAL_THROUGH_VIAS=true moves from point to point through the vias without stopping
+# (motion.through_vias: a path program a point, blended by cellsim; docs/cell-time.md).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 # shellcheck source=sim-cell.sh
@@ -47,7 +49,8 @@ cell=$out/cell.json
 # run's drift is reported (the shipped cell leaves it off: docs/accuracy.md, "Drift").
 jq ".motion.approach_deg = ${ROBOCAL_APPROACH_DEG:-(.motion.approach_deg // 0)}
     | .motion.revisit_every = ${ROBOCAL_REVISIT_EVERY:-(.motion.revisit_every // 0)}
-    | .motion.reference_every_min = ${ROBOCAL_REFERENCE_EVERY_MIN:-5}" \
+    | .motion.reference_every_min = ${ROBOCAL_REFERENCE_EVERY_MIN:-5}
+    | .motion.through_vias = ${ROBOCAL_THROUGH_VIAS:-(.motion.through_vias // false)}" \
   "${ROBOCAL_CELL:-$robot_cell}" >"$cell"
 pids=()
 cleanup() { for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done; }

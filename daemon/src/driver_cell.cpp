@@ -93,21 +93,27 @@ class DriverCell final : public CellIo {
   JointsDeg where() override { return fromDriver(controller().where().joints_deg); }
 
   MoveOutcome move(const JointsDeg& target, const MoveWatch& watch) override {
-    try {
-      const drivers::WhereReply w =
-          controller().moveJoints(toDriver(target), [&](const drivers::WhereReply&) {
-            if (watch && watch()) throw StopTheMove{};
-          });
-      return {fromDriver(w.joints_deg), false};
-    } catch (const StopTheMove&) {
-      halt();
-      return {where(), true};
-    } catch (const drivers::DriverError&) {
-      throw;
-    } catch (...) {
-      halt();  // the watch refused to go on: nothing moves on after it
-      throw;
+    return watched(watch, [&](const drivers::ValController::ProgressHandler& progress) {
+      return controller().moveJoints(toDriver(target), progress);
+    });
+  }
+
+  MoveOutcome moveThrough(const std::vector<JointsDeg>& path, const MoveWatch& watch) override {
+    if (path.size() < 2 || !controller().offersPaths()) {
+      if (path.size() > 1 && !warned_no_paths_) {
+        warned_no_paths_ = true;
+        spdlog::warn(
+            "the plan moves through vias, but the controller's dialect has no path program "
+            "(val.path_execute_command): every via is a stop, and the run takes longer than "
+            "planned");
+      }
+      return CellIo::moveThrough(path, watch);
     }
+    std::vector<drivers::Joints6> steps;
+    for (const JointsDeg& q : path) steps.push_back(toDriver(q));
+    return watched(watch, [&](const drivers::ValController::ProgressHandler& progress) {
+      return controller().movePath(steps, progress);
+    });
   }
 
   void halt() override {
@@ -140,6 +146,25 @@ class DriverCell final : public CellIo {
   }
 
  private:
+  // A driver motion watched after each WHERE: a watch that asks to stop halts the arm.
+  template <typename Motion>
+  MoveOutcome watched(const MoveWatch& watch, const Motion& motion) {
+    try {
+      const drivers::WhereReply w = motion([&](const drivers::WhereReply&) {
+        if (watch && watch()) throw StopTheMove{};
+      });
+      return {fromDriver(w.joints_deg), false};
+    } catch (const StopTheMove&) {
+      halt();
+      return {where(), true};
+    } catch (const drivers::DriverError&) {
+      throw;
+    } catch (...) {
+      halt();  // the watch refused to go on: nothing moves on after it
+      throw;
+    }
+  }
+
   drivers::ValController& controller() {
     if (!val_ || !val_->isConnected())
       throw drivers::DisconnectedError("the VAL II controller is not connected");
@@ -152,6 +177,7 @@ class DriverCell final : public CellIo {
   std::unique_ptr<drivers::BarReader> bar_;
   BarHandler on_bar_;
   DeviceState last_;
+  bool warned_no_paths_ = false;
 };
 
 }  // namespace

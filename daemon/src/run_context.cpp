@@ -297,6 +297,15 @@ JointsDeg RunContext::move(const JointsDeg& target, bool bar_attached) {
 }
 
 JointsDeg RunContext::move(const JointsDeg& target, bool bar_attached, double hard_limit_mm) {
+  return move(std::vector<JointsDeg>{target}, bar_attached, hard_limit_mm);
+}
+
+JointsDeg RunContext::moveThrough(const std::vector<JointsDeg>& path) {
+  return move(path, true, config.bar_hard_limit_mm);
+}
+
+JointsDeg RunContext::move(const std::vector<JointsDeg>& path, bool bar_attached,
+                           double hard_limit_mm) {
   checkpoint();
   if (bar_attached) watchBar(hard_limit_mm);  // nothing starts with the bar already in fault
   // Believed detached, the reference is the median of the last readings, and a change counts
@@ -310,23 +319,23 @@ JointsDeg RunContext::move(const JointsDeg& target, bool bar_attached, double ha
     detached_ = DetachedChange{config.detached_change_mm};
   }
   return io
-      .move(target,
-            [&] {
-              checkpoint();
-              if (bar_attached)
-                watchBar(hard_limit_mm);
-              else
-                watchDetached();
-              return false;
-            })
+      .moveThrough(path,
+                   [&] {
+                     checkpoint();
+                     if (bar_attached)
+                       watchBar(hard_limit_mm);
+                     else
+                       watchDetached();
+                     return false;
+                   })
       .joints_deg;
 }
 
-RunContext::Moved RunContext::moveRecentring(const JointsDeg& target) {
+RunContext::Moved RunContext::moveRecentring(const std::vector<JointsDeg>& path) {
   checkpoint();
   if (const auto d = watchBar()) return {io.where(), d};
   std::optional<double> past_soft;
-  const CellIo::MoveOutcome out = io.move(target, [&] {
+  const CellIo::MoveOutcome out = io.moveThrough(path, [&] {
     checkpoint();
     past_soft = watchBar();
     return past_soft.has_value();

@@ -112,12 +112,16 @@ class RunContext {
   JointsDeg move(const JointsDeg& target, bool bar_attached);
   // The same, the bar attached and watched against `hard_limit_mm`.
   JointsDeg move(const JointsDeg& target, bool bar_attached, double hard_limit_mm);
+  // Through `path` as moveRecentring below, the bar attached and watched against its hard limit.
+  JointsDeg moveThrough(const std::vector<JointsDeg>& path);
   // A move with the bar attached that stops where the bar passes its soft limit.
   struct Moved {
     JointsDeg joints_deg;
     std::optional<double> recentre_mm;  // the deflection that stopped it short
   };
-  Moved moveRecentring(const JointsDeg& target);
+  // Through `path` (vias, then a point) without stopping at its vias where the cell can
+  // (CellIo::moveThrough).
+  Moved moveRecentring(const std::vector<JointsDeg>& path);
   // A move with the bar believed detached, then a fresh reading after `wait_s`: did the bar
   // follow it (the move's own watch saw it, it ran over range, or the reading left `reference_mm`
   // by more than detached_change_mm)? The detach probe and the creeping nudge ask this.
@@ -176,6 +180,7 @@ class RunContext {
   void waitDetach(RunDir& dir, int shell, const std::string& message);
 
  private:
+  JointsDeg move(const std::vector<JointsDeg>& path, bool bar_attached, double hard_limit_mm);
   void onBarLine(const drivers::BarReading& r);
   // Before a window collects: what is queued delivered (and watched), then the window emptied.
   void clearWindow();

@@ -74,12 +74,22 @@ std::string connectMessage(const ShellPlan& shell) {
 
 }  // namespace
 
+namespace {
+
+CellConfig movingAsPlanned(CellConfig cell, const Plan& plan) {
+  cell.motion.through_vias = plan.cell.motion.through_vias;
+  cell.motion.blend_deg = plan.cell.motion.blend_deg;
+  return cell;
+}
+
+}  // namespace
+
 ShellRunner::ShellRunner(RunContext& ctx, FitJob& fits, RunDir& dir, const Plan& plan)
     : ctx_(ctx),
       fits_(fits),
       dir_(dir),
       plan_(plan),
-      cell_(ctx.cellFor(plan)),
+      cell_(movingAsPlanned(ctx.cellFor(plan), plan)),
       samples_(dir.loadSamples()),
       shell_watch_(ctx.config.bar_soft_limit_mm),
       centring_(ctx.nominal, cell_, ctx.config.centering, samples_) {
@@ -459,9 +469,16 @@ void ShellRunner::measure(const ShellPlan& planned, int already, JointsDeg q) {
   int corrections = 0;
   std::size_t next = 0;
   while (next < shell.steps.size()) {
-    const PlanStep& step = shell.steps[next];
+    // The steps up to where the arm stops: this one, or, moving through vias, the next point.
+    std::vector<JointsDeg> path;
+    std::size_t stop = next;
+    for (;; ++stop) {
+      path.push_back(shell.steps[stop].joints_deg);
+      if (stop + 1 == shell.steps.size() || stopsAt(cell_.motion, shell.steps[stop])) break;
+    }
+    const PlanStep& step = shell.steps[stop];
     if (ctx_.config.centering) {
-      const RunContext::Moved moved = ctx_.moveRecentring(step.joints_deg);
+      const RunContext::Moved moved = ctx_.moveRecentring(path);
       q = moved.joints_deg;
       if (moved.recentre_mm) {
         if (++corrections > 20)
@@ -478,8 +495,9 @@ void ShellRunner::measure(const ShellPlan& planned, int already, JointsDeg q) {
         continue;
       }
     } else {
-      q = ctx_.move(step.joints_deg, true);
+      q = ctx_.moveThrough(path);
     }
+    next = stop;
     if (step.kind == StepKind::kPoint) {
       const JointsDeg actual = recordPoint(planned, step, point_planned_s);
       if (next + 1 < shell.steps.size() && centring_.refitDue()) {

@@ -71,7 +71,9 @@ class ShellRunner {
   FitJob& fits_;
   RunDir& dir_;
   const Plan& plan_;
-  const CellConfig& cell_;
+  // The cell the re-plans use, moving through vias (and blending) as the plan does: its steps
+  // were marked with the plan's, the re-planned ones are marked with the same.
+  const CellConfig cell_;
   std::vector<Sample> samples_;  // every data point of the run
   // (shell, lat, lon) of every sample: a point's revisit (PlanStep::visit 1) is done when its
   // place was measured twice.

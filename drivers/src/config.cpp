@@ -96,6 +96,9 @@ ValConfig valPreset(const std::string& dialect) {
     // WHERE with the joint block first and units in the location headers.
     c.prompt = {">"};
     c.move_joints_command = "DO JMOVE #PPOINT({j1},{j2},{j3},{j4},{j5},{j6})";
+    // AS blends in a program only with SWITCH CP ON and ACCURACY set (docs/cell-time.md): not
+    // modelled, so no path program.
+    c.path_execute_command.clear();
     c.error_regex = R"(^\s*(\([A-Z]?\d+\)\s*\S.*?)\s*$)";
     c.where_joints_first = true;
     c.location_headers = {"X[mm]", "Y[mm]", "Z[mm]", "O[deg]", "A[deg]", "T[deg]"};
@@ -135,6 +138,10 @@ ValConfig valConfigFromJson(const json& j, const std::string& where) {
   r.get("where_command", c.where_command);
   r.get("speed_command", c.speed_command);
   r.get("abort_command", c.abort_command);
+  r.get("path_edit_command", c.path_edit_command);
+  r.get("path_move_line", c.path_move_line);
+  r.get("path_end_edit", c.path_end_edit);
+  r.get("path_execute_command", c.path_execute_command);
   r.get("joint_decimals", c.joint_decimals);
   r.get("error_regex", c.error_regex);
   r.get("power_off_regex", c.power_off_regex);
@@ -193,6 +200,12 @@ void validate(const ValConfig& c, const std::string& where) {
   check_template("where_command", c.where_command, {}, {});
   check_template("speed_command", c.speed_command, {"speed"}, {"speed"});
   check_template("abort_command", c.abort_command, {}, {});
+  if (!c.path_execute_command.empty()) {  // empty: no motion through vias
+    check_template("path_edit_command", c.path_edit_command, {}, {});
+    check_template("path_move_line", c.path_move_line, joints, joints);
+    check_template("path_end_edit", c.path_end_edit, {}, {});
+    check_template("path_execute_command", c.path_execute_command, {}, {});
+  }
   if (c.joint_decimals < 0 || c.joint_decimals > 6)
     throw ConfigError(where + ".joint_decimals: must be 0 to 6");
   checkRegex(c.error_regex, where + ".error_regex", 1);
@@ -345,6 +358,10 @@ json toJson(const ValConfig& c) {
               {"where_command", c.where_command},
               {"speed_command", c.speed_command},
               {"abort_command", c.abort_command},
+              {"path_edit_command", c.path_edit_command},
+              {"path_move_line", c.path_move_line},
+              {"path_end_edit", c.path_end_edit},
+              {"path_execute_command", c.path_execute_command},
               {"joint_decimals", c.joint_decimals},
               {"error_regex", c.error_regex},
               {"power_off_regex", c.power_off_regex},

@@ -241,11 +241,27 @@ ValDialect::ValDialect(ValConfig config)
       ignore_re_(compile(config_.ignore_regex, true, "val.ignore_regex")),
       question_re_(compile(config_.question_regex, false, "val.question_regex")) {}
 
-std::string ValDialect::moveCommand(const Joints6& j) const {
+namespace {
+// {j1}..{j6} of a command template, at the configured decimals.
+std::map<std::string, std::string> jointFields(const Joints6& j, int decimals) {
   std::map<std::string, std::string> fields;
-  for (int i = 0; i < 6; ++i)
-    fields["j" + std::to_string(i + 1)] = formatFixed(j[i], config_.joint_decimals);
-  return expandTemplate(config_.move_joints_command, fields);
+  for (int i = 0; i < 6; ++i) fields["j" + std::to_string(i + 1)] = formatFixed(j[i], decimals);
+  return fields;
+}
+}  // namespace
+
+std::string ValDialect::moveCommand(const Joints6& j) const {
+  return expandTemplate(config_.move_joints_command, jointFields(j, config_.joint_decimals));
+}
+
+std::vector<std::string> ValDialect::pathCommands(const std::vector<Joints6>& steps) const {
+  if (config_.path_execute_command.empty()) return {};
+  std::vector<std::string> lines{config_.path_edit_command};
+  for (const Joints6& j : steps)
+    lines.push_back(expandTemplate(config_.path_move_line, jointFields(j, config_.joint_decimals)));
+  lines.push_back(config_.path_end_edit);
+  lines.push_back(config_.path_execute_command);
+  return lines;
 }
 
 std::string ValDialect::speedCommand(double percent) const {

@@ -429,10 +429,7 @@ void ValController::setSpeed(double percent) {
 }
 
 double ValController::moveCommandTimeout(const Joints6& target) const {
-  const ValConfig& c = dialect_.config();
-  if (!last_joints_ || !speed_percent_) return std::max(c.move_timeout_s, c.motion_timeout_s);
-  const double speed_deg_s = c.slowest_joint_speed_deg_s * *speed_percent_ / 100.0;
-  return c.move_timeout_s + maxJointDiffDeg(target, *last_joints_) / speed_deg_s;
+  return pathCommandTimeout({target});
 }
 
 void ValController::abort() {
@@ -501,9 +498,16 @@ void ValController::asyncMoveJoints(const Joints6& target, WhereHandler handler,
       });
       return;
     }
+  asyncMotionCommand(dialect_.moveCommand(target), moveCommandTimeout(target), target,
+                     std::move(handler), std::move(progress));
+}
+
+void ValController::asyncMotionCommand(const std::string& text, double timeout_s,
+                                       const Joints6& target, WhereHandler handler,
+                                       ProgressHandler progress) {
   const auto start = Clock::now();
   asyncCommand(
-      dialect_.moveCommand(target), moveCommandTimeout(target), dialect_.config().move_timeout_s,
+      text, timeout_s, dialect_.config().move_timeout_s,
       [this, target, handler, progress, start](std::exception_ptr e, std::vector<std::string>) {
         const ValConfig& c = dialect_.config();
         double first_where_s = c.where_timeout_s;

@@ -105,6 +105,7 @@ void validateCell(const CellConfig& c) {
   nonNegative("motion.settle_s", c.motion.settle_s);
   nonNegative("motion.swap_s", c.motion.swap_s);
   positive("motion.via_tolerance_mm", c.motion.via_tolerance_mm);
+  inRange("motion.blend_deg", c.motion.blend_deg, 0, 30);
   if (c.motion.via_tolerance_mm >= c.bar.max_deflection_mm)
     bad("motion.via_tolerance_mm", "must be below bar.max_deflection_mm (" +
                                        std::to_string(c.bar.max_deflection_mm) +

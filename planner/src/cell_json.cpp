@@ -98,6 +98,8 @@ CellConfig cellFromJson(const json& root, const std::string& source) {
     o.get("settle_s", c.motion.settle_s);
     o.get("swap_s", c.motion.swap_s);
     o.get("via_tolerance_mm", c.motion.via_tolerance_mm);
+    o.get("through_vias", c.motion.through_vias);
+    o.get("blend_deg", c.motion.blend_deg);
     o.get("sample_step_mm", c.motion.sample_step_mm);
     o.get("approach_deg", c.motion.approach_deg, 0, 1);
     o.get("revisit_every", c.motion.revisit_every, 0, 1000);
@@ -185,6 +187,8 @@ nlohmann::ordered_json cellToJson(const CellConfig& c) {
                  {"settle_s", c.motion.settle_s},
                  {"swap_s", c.motion.swap_s},
                  {"via_tolerance_mm", c.motion.via_tolerance_mm},
+                 {"through_vias", c.motion.through_vias},
+                 {"blend_deg", c.motion.blend_deg},
                  {"sample_step_mm", c.motion.sample_step_mm},
                  {"approach_deg", c.motion.approach_deg},
                  {"revisit_every", c.motion.revisit_every},

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <optional>
 
 namespace robocal {
 namespace {
@@ -35,8 +36,44 @@ std::string describeViolation(const PlanViolation& v) {
   return where + " (" + v.rule + "): " + v.message;
 }
 
+namespace {
+
+// Moving through vias, every stretch between two stops along the path the controller blends:
+// the first problem, at the step nearest it.
+template <typename Add>
+void checkBlendedPaths(const ShellPlanner& planner, const ShellPlan& shell, double tol,
+                       const Add& add) {
+  const MotionSettings& motion = planner.cell().motion;
+  JointsDeg from = shell.connect.joints_deg;
+  for (std::size_t first = 0; first < shell.steps.size();) {
+    std::size_t last = first;
+    while (last + 1 < shell.steps.size() && !stopsAt(motion, shell.steps[last])) ++last;
+    std::vector<JointsDeg> path;
+    for (std::size_t k = first; k <= last; ++k) path.push_back(shell.steps[k].joints_deg);
+    const ShellPlanner::BlendProblem p =
+        planner.blendedPathProblem(shell.connection, shell.radius_mm, from, path, tol);
+    if (!p.problem.empty())
+      add(static_cast<int>(first + p.nearest_step), ruleOf(p.problem),
+          "on the path blended through the vias from step " + std::to_string(first) + " to " +
+              std::to_string(last) + " (motion.blend_deg " + std::to_string(motion.blend_deg) +
+              "): " + p.problem);
+    from = shell.steps[last].joints_deg;
+    first = last + 1;
+  }
+}
+
+}  // namespace
+
 std::vector<PlanViolation> checkPlan(const Model& model, const CellConfig& cell, const Plan& plan) {
   const ShellPlanner planner(model, cell);
+  // The plan moves through vias as its own settings say (robocald runs it so).
+  std::optional<ShellPlanner> blending;
+  if (plan.cell.motion.through_vias) {
+    CellConfig moving = cell;
+    moving.motion.through_vias = true;
+    moving.motion.blend_deg = plan.cell.motion.blend_deg;
+    blending.emplace(model, moving);
+  }
   const Arm& ik = planner.arm();
   const double tol = cell.motion.via_tolerance_mm;
   std::vector<PlanViolation> out;
@@ -130,6 +167,7 @@ std::vector<PlanViolation> checkPlan(const Model& model, const CellConfig& cell,
       prev_ok = ok;
       prev = &step;
     }
+    if (blending) checkBlendedPaths(*blending, shell, tol, add);
   }
   return out;
 }

@@ -30,6 +30,7 @@ ordered_json stepToJson(const PlanStep& s) {
   j["lat_deg"] = tidy(s.lat_deg);
   j["lon_deg"] = tidy(s.lon_deg);
   if (s.visit > 0) j["visit"] = s.visit;
+  if (s.stop) j["stop"] = true;
   return j;
 }
 
@@ -71,6 +72,10 @@ class Reader {
     s.lat_deg = number(j, where, "lat_deg");
     s.lon_deg = number(j, where, "lon_deg");
     s.visit = count(j, where, "visit", 0);
+    if (const auto it = j.find("stop"); it != j.end()) {
+      if (!it->is_boolean()) fail(where + ".stop", "expected true or false");
+      s.stop = it->get<bool>();
+    }
     if (s.visit > kMaxVisit)
       fail(where + ".visit", "expected 0 (first) to " + std::to_string(kMaxVisit) + " (revisits)");
     return s;

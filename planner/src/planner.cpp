@@ -3,6 +3,7 @@
 #include "parallel.hpp"
 
 #include <robocal/kinematics/ik.hpp>
+#include <robocal/kinematics/path_motion.hpp>
 #include <robocal/kinematics/units.hpp>
 #include <robocal/solver/identifiability.hpp>
 #include <robocal/solver/problem.hpp>
@@ -487,7 +488,53 @@ double ShellPlanner::moveDuration(const JointsDeg& a, const JointsDeg& b) const 
          cell_.motion.move_overhead_s;
 }
 
+ShellPlanner::BlendProblem ShellPlanner::blendedPathProblem(const Connection& c, double radius,
+                                                            const JointsDeg& from,
+                                                            const std::vector<JointsDeg>& steps,
+                                                            double tolerance_mm) const {
+  if (steps.size() < 2) return {};
+  // Time in degrees of travel: the blend's window is the same at every speed.
+  const PathMotion path(from, steps, 1.0, cell_.motion.blend_deg);
+  // A sample every this many degrees moves the ball at most about sample_step_mm (a metre's
+  // lever: the ball is nearer the axes than that on every arm we plan for).
+  const double step_deg = cell_.motion.sample_step_mm / 1000.0 * kDegPerRad;
+  const double end = path.durationS();
+  for (double t = 0; t < end + step_deg; t += step_deg) {
+    const double at = std::min(t, end);
+    const std::string problem = poseProblem(c, radius, path.at(at), tolerance_mm);
+    if (problem.empty()) continue;
+    std::size_t nearest = 0;
+    for (std::size_t k = 1; k < steps.size(); ++k)
+      if (std::abs(path.reachedS(k + 1) - at) < std::abs(path.reachedS(nearest + 1) - at))
+        nearest = k;
+    return {problem, nearest};
+  }
+  return {};
+}
+
+void ShellPlanner::markBlendStops(ShellPlan& shell) const {
+  const double tolerance = kPlannerToleranceFraction * cell_.motion.via_tolerance_mm;
+  JointsDeg from = shell.connect.joints_deg;
+  for (std::size_t first = 0; first < shell.steps.size();) {
+    std::size_t last = first;  // the stretch first..last, where the arm stops
+    while (!stopsAt(cell_.motion, shell.steps[last])) ++last;
+    std::vector<JointsDeg> path;
+    for (std::size_t k = first; k <= last; ++k) path.push_back(shell.steps[k].joints_deg);
+    const BlendProblem p =
+        blendedPathProblem(shell.connection, shell.radius_mm, from, path, tolerance);
+    if (p.problem.empty()) {
+      from = shell.steps[last].joints_deg;
+      first = last + 1;
+      continue;
+    }
+    // Stop at the via nearest the problem (the stretch's last via when that is its end), and
+    // check the stretch again up to there.
+    shell.steps[first + std::min(p.nearest_step, last - first - 1)].stop = true;
+  }
+}
+
 void ShellPlanner::finishShell(ShellPlan& shell) const {
+  if (cell_.motion.through_vias) markBlendStops(shell);
   ShellSummary& s = shell.summary;
   s.points = s.vias = 0;
   s.duration_s = 0;
@@ -500,8 +547,9 @@ void ShellPlanner::finishShell(ShellPlan& shell) const {
 }
 
 double ShellPlanner::stepDuration(const JointsDeg& from, const PlanStep& step) const {
-  return moveDuration(from, step.joints_deg) +
-         (step.kind == StepKind::kPoint ? cell_.motion.settle_s : 0.0);
+  const MotionSettings& m = cell_.motion;
+  return moveDuration(from, step.joints_deg) - (stopsAt(m, step) ? 0.0 : m.move_overhead_s) +
+         (step.kind == StepKind::kPoint ? m.settle_s : 0.0);
 }
 
 ShellPlanner::PointTry ShellPlanner::tryPoint(const Connection& c, double radius, double lat_deg,
@@ -998,8 +1046,10 @@ CellTimeParts cellTimeParts(const Plan& plan) {
     JointsDeg prev = shell.connect.joints_deg;
     for (const PlanStep& step : shell.steps) {
       parts.motion_s += (step.joints_deg - prev).cwiseAbs().maxCoeff() / m.joint_speed_deg_per_s;
-      parts.stopping_s += m.move_overhead_s;
-      ++parts.stops;
+      if (stopsAt(m, step)) {
+        parts.stopping_s += m.move_overhead_s;
+        ++parts.stops;
+      }
       if (step.kind == StepKind::kPoint) {
         ++parts.points;
         parts.dwell_s += m.settle_s;

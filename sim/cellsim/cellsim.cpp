@@ -5,6 +5,7 @@
 #include <robocal/drivers/transport.hpp>
 #include <robocal/formats/model_json.hpp>
 #include <robocal/kinematics/kinematics.hpp>
+#include <robocal/kinematics/path_motion.hpp>
 #include <robocal/kinematics/sample.hpp>
 #include <robocal/kinematics/units.hpp>
 #include <robocal/sim/true_robot_json.hpp>
@@ -40,6 +41,18 @@ namespace {
 namespace asio = boost::asio;
 using drivers::Clock;
 using drivers::Joints6;
+
+JointsDeg toJoints(const Joints6& a) {
+  JointsDeg q;
+  for (int i = 0; i < 6; ++i) q[i] = a[i];
+  return q;
+}
+
+Joints6 toArray(const JointsDeg& q) {
+  Joints6 a{};
+  for (int i = 0; i < 6; ++i) a[i] = q[i];
+  return a;
+}
 
 double secondsSince(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
@@ -214,6 +227,12 @@ class Cell {
     where_re_ = drivers::templateRegex(config.val.where_command, unused);
     abort_re_ = drivers::templateRegex(config.val.abort_command, unused);
     speed_re_ = drivers::templateRegex(config.val.speed_command, unused);
+    if (!config.val.path_execute_command.empty()) {  // never matched otherwise
+      path_edit_re_ = drivers::templateRegex(config.val.path_edit_command, unused);
+      path_line_re_ = drivers::templateRegex(config.val.path_move_line, path_line_fields_);
+      path_end_re_ = drivers::templateRegex(config.val.path_end_edit, unused);
+      path_execute_re_ = drivers::templateRegex(config.val.path_execute_command, unused);
+    }
     connectBar(o.connection, o.extension_mm, o.bar_here ? -1 : o.bar_mm);
     val_.setHandler([this](std::string_view b) { valBytes(b); });
     bar_.setHandler([this](std::string_view b) { barBytes(b); });
@@ -352,12 +371,13 @@ class Cell {
     std::snprintf(buf, sizeof buf,
                   "joints_deg=%.3f,%.3f,%.3f,%.3f,%.3f,%.3f moving=%d estop=%d speed=%.0f "
                   "connection=%s bar_mm=%.3f extension_mm=%.3f deflection_mm=%.4f "
-                  "ring_mm=%.4f broken_events=%zu val=%s bar=%s",
+                  "ring_mm=%.4f broken_events=%zu val=%s bar=%s moves=%ld paths=%ld "
+                  "moving_peak_mm=%.4f",
                   joints_[0], joints_[1], joints_[2], joints_[3], joints_[4], joints_[5],
                   moving_ ? 1 : 0, estop_ ? 1 : 0, speed_, connection_name_.c_str(), bar_mm_,
                   extension_mm_, connected ? d : 0.0, ring(), events_.size(),
                   val_.isOpen() ? val_.slavePath().c_str() : "-",
-                  bar_.isOpen() ? bar_.slavePath().c_str() : "-");
+                  bar_.isOpen() ? bar_.slavePath().c_str() : "-", moves_, paths_, moving_peak_mm_);
     return buf;
   }
 
@@ -400,8 +420,7 @@ class Cell {
   // its realism (backlash by each joint's last direction, gravity compliance, the warm-up at this
   // cell time).
   double trueLength() const {
-    JointsDeg j;
-    for (int i = 0; i < 6; ++i) j[i] = joints_[i];
+    const JointsDeg j = toJoints(joints_);
     const Eigen::Vector3d& ball = truth_.balls_mm[connection_.ball_index];
     const Eigen::Vector3d& chuck = truth_.chucks_mm[connection_.chuck_index];
     if (ideal_) return kin_.barLength(j, ball, chuck);
@@ -439,6 +458,7 @@ class Cell {
     bool connected = false;
     const double d = deflection(connected);
     if (!connected) return;
+    if (moving_) moving_peak_mm_ = std::max(moving_peak_mm_, std::abs(d));
     if (std::abs(d) > o_.range_mm) {
       if (!over_) {
         events_.push_back({secondsSince(start_time_), connection_name_, d});
@@ -459,13 +479,12 @@ class Cell {
   void tick() {
     if (moving_) {
       const double t = secondsSince(move_t0_);
-      const double s = move_duration_s_ > 0 ? std::min(1.0, t / move_duration_s_) : 1.0;
-      for (int i = 0; i < 6; ++i) joints_[i] = move_from_[i] + (target_[i] - move_from_[i]) * s;
-      if (s >= 1.0) {
+      joints_ = toArray(motion_->at(t));
+      if (t >= motion_->durationS()) {
         moving_ = false;
         motionEnded();
         // The ring starts when the motion ended, not at this tick.
-        ring_t0_ = move_t0_ + toDuration(move_duration_s_);
+        ring_t0_ = move_t0_ + toDuration(motion_->durationS());
         ring_mm_ = o_.settling.amplitudeFor(move_travel_mm_);
       }
       if (estop_at_ && t >= *estop_at_) {
@@ -524,9 +543,7 @@ class Cell {
   }
 
   Eigen::Vector3d toolPosition(const Joints6& joints_deg) const {
-    JointsDeg j;
-    for (int i = 0; i < 6; ++i) j[i] = joints_deg[i];
-    return kin_.toolPose(j).translation();
+    return kin_.toolPose(toJoints(joints_deg)).translation();
   }
 
   // The tool's ringing along the bar now (settling.hpp), in cell time (time_scale).
@@ -536,8 +553,7 @@ class Cell {
   }
 
   drivers::Location6 location() const {
-    JointsDeg j;
-    for (int i = 0; i < 6; ++i) j[i] = joints_[i];
+    const JointsDeg j = toJoints(joints_);
     const Eigen::Isometry3d pose = kin_.toolPose(j);
     const Eigen::Vector3d oat = pose.linear().eulerAngles(2, 1, 2) * kDegPerRad;
     const Eigen::Vector3d p = pose.translation();
@@ -653,33 +669,66 @@ class Cell {
       speed_ = s;
       return {};
     }
-    if (std::regex_match(line, m, move_re_)) {
-      if (estop_) return {valErrorLine(dialect(), ValFault::kPowerOff)};
-      Joints6 target{};
-      for (std::size_t i = 0; i < move_fields_.size(); ++i)
-        target[std::stoi(move_fields_[i].substr(1)) - 1] = std::stod(m[i + 1].str());
+    if (editing_) return programLine(line);
+    if (std::regex_match(line, m, path_edit_re_)) {
+      editing_ = true;  // a fresh program: what was there before is replaced
+      program_.clear();
+      return {};
+    }
+    if (std::regex_match(line, m, path_execute_re_)) {
+      if (program_.empty()) return {valErrorLine(dialect(), ValFault::kUnknownCommand)};
+      ++paths_;
+      return startMotion(program_, o_.blend_deg);
+    }
+    if (std::regex_match(line, m, move_re_)) return startMotion({jointsOf(m, move_fields_)}, 0);
+    return {valErrorLine(dialect(), ValFault::kUnknownCommand)};
+  }
+
+  Joints6 jointsOf(const std::smatch& m, const std::vector<std::string>& fields) const {
+    Joints6 j{};
+    for (std::size_t i = 0; i < fields.size(); ++i)
+      j[std::stoi(fields[i].substr(1)) - 1] = std::stod(m[i + 1].str());
+    return j;
+  }
+
+  // A line typed while a path program is edited: a step, or the end of the editing.
+  std::vector<std::string> programLine(const std::string& line) {
+    std::smatch m;
+    if (std::regex_match(line, m, path_end_re_)) {
+      editing_ = false;
+      return {};
+    }
+    if (!std::regex_match(line, m, path_line_re_))
+      return {valErrorLine(dialect(), ValFault::kUnknownCommand)};
+    program_.push_back(jointsOf(m, path_line_fields_));
+    return {};
+  }
+
+  // A DO MOVE (one waypoint, no blend) or a path program's run (blended,
+  // robocal/kinematics/path_motion.hpp).
+  std::vector<std::string> startMotion(const std::vector<Joints6>& targets, double blend_deg) {
+    if (estop_) return {valErrorLine(dialect(), ValFault::kPowerOff)};
+    std::vector<JointsDeg> waypoints;
+    for (const Joints6& target : targets) {
       for (int k = 0; k < 6; ++k)
         if (target[k] < truth_.joints[k].min_deg || target[k] > truth_.joints[k].max_deg)
           return {valErrorLine(dialect(), ValFault::kOutOfRange)};
-      ++moves_;
-      move_from_ = joints_;
-      {  // each joint's backlash takes the side of the motion about to start
-        JointsDeg from, to;
-        for (int k = 0; k < 6; ++k) from[k] = joints_[k], to[k] = target[k];
-        approach_ = approachOf(from, to, approach_);
-      }
-      target_ = target;
-      double longest = 0;
-      for (int k = 0; k < 6; ++k) longest = std::max(longest, std::abs(target[k] - joints_[k]));
-      move_duration_s_ = longest / (o_.joint_speed_deg_s * speed_ / 100.0 * o_.time_scale);
-      move_travel_mm_ = (toolPosition(target) - toolPosition(joints_)).norm();
-      move_t0_ = Clock::now();
-      moving_ = true;
-      if (o_.estop_on_move > 0 && moves_ == o_.estop_on_move) estop_at_ = move_duration_s_ / 2;
-      val_busy_ = o_.val_sync_moves && move_duration_s_ > 0;
-      return {};
+      waypoints.push_back(toJoints(target));
     }
-    return {valErrorLine(dialect(), ValFault::kUnknownCommand)};
+    ++moves_;
+    motion_.emplace(toJoints(joints_), waypoints,
+                    o_.joint_speed_deg_s * speed_ / 100.0 * o_.time_scale, blend_deg);
+    // Each joint's backlash takes the side of the final approach.
+    approach_ = approachOf(motion_->lastFrom(), motion_->target(), approach_);
+    move_travel_mm_ =
+        (toolPosition(toArray(motion_->target())) - toolPosition(toArray(motion_->lastFrom())))
+            .norm();
+    move_t0_ = Clock::now();
+    moving_ = true;
+    const double duration_s = motion_->durationS();
+    if (o_.estop_on_move > 0 && moves_ == o_.estop_on_move) estop_at_ = duration_s / 2;
+    val_busy_ = o_.val_sync_moves && duration_s > 0;
+    return {};
   }
 
   // ------------------------------------------------------------------------------ ball-bar
@@ -783,18 +832,24 @@ class Cell {
   Clock::time_point start_time_;
 
   // robot
-  Joints6 joints_{}, target_{}, move_from_{};
+  Joints6 joints_{};
+  std::optional<PathMotion> motion_;  // the current (or last) motion
   bool moving_ = false, estop_ = false;
   Clock::time_point move_t0_{};
-  double move_duration_s_ = 0, speed_ = 50;
+  double speed_ = 50;
   double move_travel_mm_ = 0;       // tool travel of the current move
   Clock::time_point ring_t0_{};     // the end of the last move
   double ring_mm_ = 0;              // its ringing's starting amplitude
   std::optional<double> estop_at_;  // seconds into the current move
-  long moves_ = 0;
+  long moves_ = 0, paths_ = 0;      // motions started; of which path programs
+  double moving_peak_mm_ = 0;       // the largest |deflection| while moving, since the start
   // VAL II
   std::regex move_re_, where_re_, abort_re_, speed_re_;
   std::vector<std::string> move_fields_;
+  std::regex path_edit_re_, path_line_re_, path_end_re_, path_execute_re_;
+  std::vector<std::string> path_line_fields_;
+  bool editing_ = false;          // a path program is being written (EDIT ... E)
+  std::vector<Joints6> program_;  // its steps
   std::string val_line_;
   bool val_after_cr_ = false;
   drivers::WhereLayout where_layout_;

@@ -32,6 +32,8 @@ struct Options {
   double time_scale = 1.0;         // motion runs this many times faster
   double joint_speed_deg_s = 60;   // at SPEED 100
   double speed_percent = 50;       // monitor speed at start
+  // A path program's blend at each via, degrees of travel (robocal/kinematics/path_motion.hpp).
+  double blend_deg = 2;
   drivers::Joints6 start_joints_deg{0, 45, -90, 0, 45, 0};
   double quantum_deg = 0.01;
   double noise_mm = 0.001;

@@ -34,6 +34,8 @@ fault stall val|bar S | fault disconnect val|bar S | quit
   --time-scale F             motion runs F times faster                           [1]
   --joint-speed-deg-s V      joint speed at SPEED 100                             [60]
   --speed PERCENT            monitor speed at start                               [50]
+  --blend-deg B              a path program's blend at each via, degrees of the largest joint's
+                             travel (an assumption: docs/cell-time.md); 0: no corner cut [2]
   --start-joints A,B,C,D,E,F joint readings at start, deg                  [0,45,-90,0,45,0]
   --quantum-deg Q            joint-reading quantisation                           [0.01]
   --noise-mm S               LVDT noise, standard deviation                       [0.001]
@@ -108,6 +110,7 @@ int main(int argc, char** argv) {
                                                {"time-scale", true},
                                                {"joint-speed-deg-s", true},
                                                {"speed", true},
+                                               {"blend-deg", true},
                                                {"start-joints", true},
                                                {"quantum-deg", true},
                                                {"noise-mm", true},
@@ -187,6 +190,8 @@ int main(int argc, char** argv) {
     o.time_scale = num("time-scale", o.time_scale);
     o.joint_speed_deg_s = num("joint-speed-deg-s", o.joint_speed_deg_s);
     o.speed_percent = num("speed", o.speed_percent);
+    o.blend_deg = num("blend-deg", o.blend_deg);
+    if (o.blend_deg < 0) throw std::invalid_argument("--blend-deg must not be negative");
     if (o.time_scale <= 0 || o.joint_speed_deg_s <= 0 || o.speed_percent <= 0 ||
         o.speed_percent > 100)
       throw std::invalid_argument(

@@ -53,12 +53,14 @@ struct Cell {
 
   // `daemon_keys` replace or add robocald config keys; `sim_args` are added to cellsim's (a later
   // option wins); `drivers_json` (a drivers config, e.g. a dialect) is given to both cellsim and
-  // robocald; `model` is the arm's nominal model (the truth is it perturbed).
+  // robocald; `model` is the arm's nominal model (the truth is it perturbed); `cell_patch` is
+  // merged into the cell file (e.g. {"motion": {"through_vias": true}}).
   Cell(const std::vector<std::string>& connections, unsigned seed, bool centering = true,
        double lon_step_deg = 60, double time_scale = 50,
        const nlohmann::json& daemon_keys = nlohmann::json::object(),
        const std::vector<std::string>& sim_args = {}, const std::string& drivers_json = "",
-       const std::string& model = kModel) {
+       const std::string& model = kModel,
+       const nlohmann::json& cell_patch = nlohmann::json::object()) {
     truth_path = dir / "truth.json";
     const auto r = runRobocal("simulate --model " + model + " --seed " + std::to_string(seed) +
                               " --connections B1C1 --points-per-shell 1 --out " + (dir / "x.csv") +
@@ -71,7 +73,9 @@ struct Cell {
         "--noise-mm", "0.03"};
     args.insert(args.end(), sim_args.begin(), sim_args.end());
     sim = std::make_unique<CellSimProcess>(args, drivers_json);
-    std::ofstream(dir / "cell.json") << smallCell(connections, {0}, lon_step_deg).dump(1);
+    nlohmann::json cell = smallCell(connections, {0}, lon_step_deg);
+    cell.merge_patch(cell_patch);
+    std::ofstream(dir / "cell.json") << cell.dump(1);
     nlohmann::json drivers = drivers::toJson(sim->driversConfig());
     drivers["bar"]["mode"] = "streamed";
     drivers["val"]["poll_interval_s"] = 0.01;

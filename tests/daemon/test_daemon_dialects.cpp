@@ -70,3 +70,39 @@ TEST_CASE("a Staubli RX160 under V+ runs to DONE with every connection check pas
   REQUIRE(result["class"] == "RESULT");
   CHECK(loadSamplesFile(result["samples_file"].get<std::string>()).size() >= 8);
 }
+
+TEST_CASE("a plan through vias runs each point's vias as one path program, twice",
+          "[e2e][dialects][paths]") {
+  // motion.through_vias in the plan's cell: the daemon sends the moves from one point to the next
+  // as a path program (EDIT ... EXECUTE), cellsim blends its corners as much as the cell says
+  // (blend_deg), the plan stops at a via where the blended corner would leave the bar's
+  // tolerance, and the bar is watched along the path as along a move. A second run after the
+  // first, from its end.
+  Cell cell({"B1C1", "B2C2"}, 5, true, 60, 50, json::object(), {"--blend-deg", "3"}, "", kModel,
+            {{"motion", {{"through_vias", true}, {"blend_deg", 3}}}});
+  auto client = cell.daemon->client();
+  client->send({{"cmd", "watch"}, {"enable", true}});
+  long paths_before = 0;
+  for (int run = 1; run <= 2; ++run) {
+    INFO("run " << run);
+    REQUIRE(client->request({{"cmd", "start"}, {"token", cell.daemon->token()}}, 30,
+                            "ACK")["class"] == "ACK");
+    std::vector<json> seen;
+    const std::string end =
+        cell.operate(*client, {"done", "paused", "error", "aborted"}, 180, &seen);
+    INFO(cell.daemon->logText().substr(0, 6000));
+    REQUIRE(end == "done");
+    int samples = 0;
+    for (const json& o : seen) samples += o["class"] == "SAMPLE";
+    CHECK(samples >= 8);
+    const long paths = std::stol(cell.sim->status("paths"));
+    CHECK(paths > paths_before);  // points reached through vias, each by one program
+    paths_before = paths;
+    CHECK(cell.sim->status("broken_events") == "0");
+    CHECK(cell.sim->status("moving") == "0");
+    UNSCOPED_INFO("cellsim after run " << run << ": moves " << cell.sim->status("moves")
+                                       << ", paths " << paths << ", peak deflection moving "
+                                       << cell.sim->status("moving_peak_mm") << " mm");
+  }
+  CHECK(std::stod(cell.sim->status("moving_peak_mm")) < 1.6);  // the daemon's hard limit
+}

@@ -7,9 +7,13 @@
 
 #include <robocal/compensation/accuracy.hpp>
 #include <robocal/kinematics/kinematics.hpp>
+#include <robocal/planner/cell_json.hpp>
 #include <robocal/planner/check.hpp>
 #include <robocal/planner/design.hpp>
+#include <robocal/planner/plan_json.hpp>
 #include <robocal/solver/calibrate.hpp>
+
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -242,6 +246,58 @@ TEST_CASE("an optimal plan keeps its time budget, swaps included", "[design][hea
   CHECK(predictedWorkVolumeError(nominal(), longer, workJoints(), 0.084) <
         predictedWorkVolumeError(nominal(), plan, workJoints(), 0.084));
   CHECK_THROWS_AS(planOptimal(nominal(), cell, workJoints(), smallOptions()), PlanError);
+}
+
+TEST_CASE("through vias, a plan's vias cost their travel, and a blended corner too far stops",
+          "[design]") {
+  CellConfig cell = smallCell();
+  cell.connections = parseConnections("B1C2");
+  const Plan stopping = planCell(nominal(), cell);
+  cell.motion.through_vias = true;
+  cell.motion.blend_deg = 0;  // corners not cut: every via passed through
+  const Plan through = planCell(nominal(), cell);
+  // The same steps (the vias still keep the nominal bar within via_tolerance_mm), cheaper.
+  REQUIRE(through.summary.points == stopping.summary.points);
+  REQUIRE(through.summary.vias == stopping.summary.vias);
+  REQUIRE(stopping.summary.vias > 0);
+  CHECK(through.summary.duration_s ==
+        Approx(stopping.summary.duration_s - stopping.summary.vias * cell.motion.move_overhead_s));
+  const CellTimeParts parts = cellTimeParts(through);
+  CHECK(parts.stops == through.summary.points);
+  CHECK(parts.total_s() == Approx(through.summary.cell_time_s));
+  CHECK(cellTimeParts(stopping).motion_s == Approx(parts.motion_s));
+  CHECK(checkPlan(nominal(), cell, through).empty());
+
+  // Blended corners: where the path cut inside a via would leave the bar's tolerance, the arm
+  // stops at that via; the more the blend, the more such vias; every plan passes its check.
+  const auto stopsOf = [](const Plan& p) {
+    int n = 0;
+    for (const ShellPlan& sh : p.shells)
+      for (const PlanStep& st : sh.steps) n += st.kind == StepKind::kVia && st.stop;
+    return n;
+  };
+  CHECK(stopsOf(through) == 0);
+  cell.motion.blend_deg = 2;
+  const Plan blended = planCell(nominal(), cell);
+  cell.motion.blend_deg = 10;
+  const Plan wide = planCell(nominal(), cell);
+  CHECK(stopsOf(blended) <= stopsOf(wide));
+  CHECK(stopsOf(wide) > 0);
+  CHECK(stopsOf(wide) < wide.summary.vias);
+  CHECK(cellTimeParts(wide).stops == wide.summary.points + stopsOf(wide));
+  CHECK(checkPlan(nominal(), cell, wide).empty());
+  // The plan without those stops, run with that blend, is refused.
+  Plan unsafe = through;
+  unsafe.cell.motion.blend_deg = 10;
+  CHECK_FALSE(checkPlan(nominal(), cell, unsafe).empty());
+
+  // The cell file keeps the choice; a stop flag survives the plan file.
+  const CellConfig back = cellFromJson(nlohmann::json::parse(cellToJson(cell).dump()));
+  CHECK(back.motion.through_vias);
+  CHECK(back.motion.blend_deg == 10);
+  CHECK_FALSE(
+      cellFromJson(nlohmann::json::parse(cellToJson(smallCell()).dump())).motion.through_vias);
+  CHECK(stopsOf(planFromJson(nlohmann::json::parse(planToJson(wide).dump()))) == stopsOf(wide));
 }
 
 TEST_CASE("a short tour visits every point once and is no longer than the given order",

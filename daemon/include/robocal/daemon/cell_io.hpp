@@ -13,6 +13,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace robocal::daemon {
 
@@ -52,6 +53,16 @@ class CellIo {
   // timeout) are thrown as drivers::DriverError. An exception from the watch ends the move too and
   // goes on to the caller; the robot is then halted first.
   virtual MoveOutcome move(const JointsDeg& target, const MoveWatch& watch) = 0;
+  // Moves through `path` (the last step is where the arm comes to rest) without stopping at the
+  // steps before it where the controller can (a path program, val.path_*); otherwise, and for
+  // one step, one move() a step. The watch and the errors as move(); a watch that stops it stops
+  // the whole path.
+  virtual MoveOutcome moveThrough(const std::vector<JointsDeg>& path, const MoveWatch& watch) {
+    MoveOutcome out{where(), false};
+    for (const JointsDeg& step : path)
+      if (out = move(step, watch); out.stopped) break;
+    return out;
+  }
   // Halts the robot (the controller's ABORT); never throws.
   virtual void halt() = 0;
   // The drivers' counters of faults they absorbed (garbled lines, retries, timeouts), by name.

@@ -41,6 +41,15 @@ struct ValConfig {
   std::string where_command = "WHERE";
   std::string speed_command = "SPEED {speed}";
   std::string abort_command = "ABORT";
+  // Motion through vias without stopping (docs/cell-time.md; a guess at VAL II and V+ practice,
+  // tried on robocal-cellsim only): the vias to the next point written as a program and executed,
+  // the controller blending its consecutive MOVEs. Used when the plan's cell asks for it
+  // (motion.through_vias); an empty path_execute_command means the dialect does not offer it and
+  // every via is a DO MOVE that stops.
+  std::string path_edit_command = "EDIT RCPATH";  // opens the program, emptied, for editing
+  std::string path_move_line = "MOVE #PPOINT({j1},{j2},{j3},{j4},{j5},{j6})";  // one a step
+  std::string path_end_edit = "E";                                             // leaves the editor
+  std::string path_execute_command = "EXECUTE RCPATH";  // runs it; WHERE is answered meanwhile
   int joint_decimals = 3;
   // One capture: the controller's message. Lines matching it are errors. The message must
   // start with a character other than '*' or a space: a bare "*" is VAL's busy prompt.

@@ -83,6 +83,9 @@ class ValDialect {
   const ValConfig& config() const { return config_; }
 
   std::string moveCommand(const Joints6& joints_deg) const;
+  // The lines that write a path program through `steps` (val.path_*; the last step is where the
+  // arm comes to rest), its execute command last; empty when the dialect offers none.
+  std::vector<std::string> pathCommands(const std::vector<Joints6>& steps_deg) const;
   std::string speedCommand(double percent) const;
   // The message of an error line ("Position out of range"), or nullopt for other lines.
   std::optional<std::string> errorMessage(const std::string& line) const;

@@ -103,6 +103,15 @@ class ValController {
   void asyncWhere(WhereHandler handler);
   void asyncMoveJoints(const Joints6& target_deg, WhereHandler handler,
                        ProgressHandler progress = {});
+  // Motion through vias without stopping (val.path_*, docs/cell-time.md): writes a program through
+  // `steps_deg` (the last is the target), one line at a time, each line only after the previous
+  // one was accepted, runs it, and polls WHERE as a move does until the arm is still at the last
+  // step. DriverError when the dialect offers no path program (offersPaths()) or a step is not a
+  // number; a line the controller refuses ends it before anything runs.
+  bool offersPaths() const { return !dialect_.config().path_execute_command.empty(); }
+  void asyncMovePath(const std::vector<Joints6>& steps_deg, WhereHandler handler,
+                     ProgressHandler progress = {});
+  WhereReply movePath(const std::vector<Joints6>& steps_deg, const ProgressHandler& progress = {});
   // Error lines the controller prints between commands (E-stop), as they arrive.
   void onUnsolicitedError(std::function<void(const std::string&)> callback) {
     unsolicited_callback_ = std::move(callback);
@@ -138,6 +147,19 @@ class ValController {
   void pollMotion(std::shared_ptr<MotionMonitor> monitor, Joints6 target, WhereHandler handler,
                   ProgressHandler progress, double where_timeout_s);
   void asyncWhere(double timeout_s, WhereHandler handler);
+  // A command that starts a motion to `target` (a DO MOVE, a path program's execute), then its
+  // watch by WHERE. A synchronous controller's prompt comes back when the motion ends: past its
+  // deadline with the echo seen, WHERE decides.
+  void asyncMotionCommand(const std::string& text, double timeout_s, const Joints6& target,
+                          WhereHandler handler, ProgressHandler progress);
+  // The program lines of a path from `next` on, each after the previous one's reply.
+  void sendPathLines(std::shared_ptr<std::vector<std::string>> lines, std::size_t next,
+                     Joints6 target, double timeout_s, WhereHandler handler,
+                     ProgressHandler progress);
+  void leaveEditor(std::shared_ptr<std::vector<std::string>> lines, std::size_t failed,
+                   std::exception_ptr error, WhereHandler handler);
+  // moveCommandTimeout over a path: its joint travel step by step.
+  double pathCommandTimeout(const std::vector<Joints6>& steps_deg) const;
   std::string describeTimeout(const std::string& command, double timeout_s,
                               const ValReplyCollector& reply) const;
 

@@ -60,6 +60,16 @@ struct MotionSettings {
   // 0.02 halved the realistic truth's extra error (docs/accuracy.md). Off (0) by default until the
   // optimal and check plans are tuned with it (they lose points and minutes to it).
   double approach_deg = 0;
+  // The arm moves through the vias between two points without stopping (the controller blends a
+  // program's moves: val.path_* in the drivers config, docs/cell-time.md): a via costs its travel,
+  // not a stop. Only where the controller is known to do it; robocal-cellsim models it. Off: every
+  // via is a DO MOVE that stops (move_overhead_s each).
+  bool through_vias = false;
+  // How far the controller blends a corner, in degrees of the largest joint's travel (the window
+  // its path is averaged over: robocal/kinematics/path_motion.hpp; robocal-cellsim's --blend-deg).
+  // Moving through vias, the planner checks the blended path within via_tolerance_mm and stops at
+  // a via where it is not. An assumption until measured on the controller (docs/cell-time.md).
+  double blend_deg = 2;
   // When positive, after every this many points of a shell the point before the last is measured
   // again (its revisit, reached the same way): the revisits measure the bar's own noise, so a fit
   // judges its residual against it (solver/adequacy.hpp) instead of assuming it. 0: none.

@@ -33,7 +33,15 @@ struct PlanStep {
   // (motion.revisit_every) and, for a shell's reference pose, its repeats
   // (motion.reference_every_min).
   int visit = 0;
+  // A via the arm stops at even when it moves through vias (motion.through_vias): the blended
+  // corner here would leave the bar's tolerance (ShellPlanner::blendedPathProblem).
+  bool stop = false;
 };
+
+// The arm comes to rest at this step: every point, and a via unless motion.through_vias.
+inline bool stopsAt(const MotionSettings& motion, const PlanStep& step) {
+  return step.kind == StepKind::kPoint || !motion.through_vias || step.stop;
+}
 
 // Where a point at `q` is approached from: every joint `step_deg` below it, and one joint
 // further so that the bar between `ball` (tool frame) and `chuck` keeps its length at q (that
@@ -211,6 +219,17 @@ class ShellPlanner {
   // Time of a joint-interpolated move (s), without dwell.
   double moveDuration(const JointsDeg& a, const JointsDeg& b) const;
 
+  // Moving through vias: the first problem along the path the controller blends from `from`
+  // through `steps` (the last is where it stops; robocal/kinematics/path_motion.hpp with
+  // motion.blend_deg), sampled at most motion.sample_step_mm of the ball apart, and the index of
+  // the step nearest it. Empty when the path is safe or has one step (no corner).
+  struct BlendProblem {
+    std::string problem;
+    std::size_t nearest_step = 0;
+  };
+  BlendProblem blendedPathProblem(const Connection& c, double radius, const JointsDeg& from,
+                                  const std::vector<JointsDeg>& steps, double tolerance_mm) const;
+
  private:
   struct Node;
   struct PointTry {
@@ -256,7 +275,11 @@ class ShellPlanner {
   // is safe: planApproach and an optimal plan's candidates judge it the same way.
   std::string approachProblem(const Connection& c, double radius, const JointsDeg& q,
                               JointsDeg& pre_q) const;
+  // Marks the vias to stop at (moving through vias), then sums the shell up.
   void finishShell(ShellPlan& shell) const;
+  // Moving through vias: each stretch between two stops whose blended path breaks a rule stops at
+  // the via nearest the problem, until every stretch is safe.
+  void markBlendStops(ShellPlan& shell) const;
   // The planned time of `step` reached from `from`: its move, and the settle at a point.
   double stepDuration(const JointsDeg& from, const PlanStep& step) const;
   Node nodeFor(const Connection& c, double radius, double lat_deg, double lon_deg,
@@ -302,7 +325,7 @@ void summarizePlan(Plan& plan);
 // add up to summary.cell_time_s.
 struct CellTimeParts {
   int points = 0;
-  int stops = 0;          // moves that end in a stop: points, vias and pre-points
+  int stops = 0;          // moves that end in a stop: points, and vias unless passed through
   double dwell_s = 0;     // settle_s at every point
   double motion_s = 0;    // the moves themselves, at the joint speed
   double stopping_s = 0;  // move_overhead_s per stop
