@@ -437,7 +437,8 @@ void ShellRunner::replanFrom(ShellPlan& shell, std::size_t from, const JointsDeg
                      {"joints", std::vector<double>(s.joints_deg.data(), s.joints_deg.data() + 6)},
                      {"lat_deg", s.lat_deg},
                      {"lon_deg", s.lon_deg},
-                     {"visit", s.visit}});
+                     {"visit", s.visit},
+                     {"stop", stopsAt(cell_.motion, s)}});
   }
   const std::string file = "replans/" + std::to_string(replans_) + ".json";
   std::filesystem::create_directories(dir_.file("replans"));

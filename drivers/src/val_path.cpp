@@ -42,9 +42,17 @@ void ValController::asyncMovePath(const std::vector<Joints6>& steps, WhereHandle
 void ValController::sendPathLines(std::shared_ptr<std::vector<std::string>> lines, std::size_t next,
                                   Joints6 target, double timeout_s, WhereHandler handler,
                                   ProgressHandler progress) {
-  if (next + 1 == lines->size())  // the execute command: a motion, watched as one
-    return asyncMotionCommand(lines->back(), timeout_s, target, std::move(handler),
-                              std::move(progress));
+  if (next + 1 == lines->size()) {
+    // The program is written. The watch sees the arm once more before anything moves (a stop
+    // asked for while the lines went out ends it here), then the execute command: a motion,
+    // watched as one.
+    return asyncWhere(
+        [this, lines, target, timeout_s, handler, progress](std::exception_ptr e, WhereReply w) {
+          if (e) return handler(e, {});
+          if (progress) progress(w);
+          asyncMotionCommand(lines->back(), timeout_s, target, handler, progress);
+        });
+  }
   asyncCommand((*lines)[next], dialect_.config().command_timeout_s,
                [this, lines, next, target, timeout_s, handler, progress](std::exception_ptr e,
                                                                          std::vector<std::string>) {

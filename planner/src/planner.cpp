@@ -495,29 +495,32 @@ ShellPlanner::BlendProblem ShellPlanner::blendedPathProblem(const Connection& c,
   if (steps.size() < 2) return {};
   // Time in degrees of travel: the blend's window is the same at every speed.
   const PathMotion path(from, steps, 1.0, cell_.motion.blend_deg);
-  // A sample every this many degrees moves the ball at most about sample_step_mm (a metre's
-  // lever: the ball is nearer the axes than that on every arm we plan for).
-  const double step_deg = cell_.motion.sample_step_mm / 1000.0 * kDegPerRad;
+  // A sample every this many degrees of the largest joint's travel moves the ball at most about
+  // sample_step_mm: a 2.5 m lever, for the ball's distance from the axes summed over the joints
+  // that turn together (walkSegment measures instead; a blended path has no straight segment).
+  const double step_deg = cell_.motion.sample_step_mm / 2500.0 * kDegPerRad;
   const double end = path.durationS();
   for (double t = 0; t < end + step_deg; t += step_deg) {
     const double at = std::min(t, end);
     const std::string problem = poseProblem(c, radius, path.at(at), tolerance_mm);
     if (problem.empty()) continue;
     std::size_t nearest = 0;
+    // The blended arm is half a blend behind the linear path.
+    const double lag = cell_.motion.blend_deg / 2;
     for (std::size_t k = 1; k < steps.size(); ++k)
-      if (std::abs(path.reachedS(k + 1) - at) < std::abs(path.reachedS(nearest + 1) - at))
+      if (std::abs(path.reachedS(k + 1) + lag - at) <
+          std::abs(path.reachedS(nearest + 1) + lag - at))
         nearest = k;
     return {problem, nearest};
   }
   return {};
 }
 
-void ShellPlanner::markBlendStops(ShellPlan& shell) const {
+void ShellPlanner::markBlendStops(ShellPlan& shell, std::size_t first_step, JointsDeg from) const {
   const double tolerance = kPlannerToleranceFraction * cell_.motion.via_tolerance_mm;
-  JointsDeg from = shell.connect.joints_deg;
-  for (std::size_t first = 0; first < shell.steps.size();) {
+  for (std::size_t first = first_step; first < shell.steps.size();) {
     std::size_t last = first;  // the stretch first..last, where the arm stops
-    while (!stopsAt(cell_.motion, shell.steps[last])) ++last;
+    while (last + 1 < shell.steps.size() && !stopsAt(cell_.motion, shell.steps[last])) ++last;
     std::vector<JointsDeg> path;
     for (std::size_t k = first; k <= last; ++k) path.push_back(shell.steps[k].joints_deg);
     const BlendProblem p =
@@ -534,7 +537,7 @@ void ShellPlanner::markBlendStops(ShellPlan& shell) const {
 }
 
 void ShellPlanner::finishShell(ShellPlan& shell) const {
-  if (cell_.motion.through_vias) markBlendStops(shell);
+  if (cell_.motion.through_vias) markBlendStops(shell, 0, shell.connect.joints_deg);
   ShellSummary& s = shell.summary;
   s.points = s.vias = 0;
   s.duration_s = 0;
@@ -995,6 +998,9 @@ ShellPlan ShellPlanner::replanRemaining(const ShellPlan& old, std::size_t next_s
     shell.steps.push_back({StepKind::kPoint, s.joints_deg, step.lat_deg, step.lon_deg, step.visit});
     prev = node;
   }
+  // The arm goes on from `current`, not from the step before next_step: its first blended
+  // stretch is checked from there (finishShell checks the shell from its connect pose as well).
+  if (cell_.motion.through_vias) markBlendStops(shell, next_step, current);
   finishShell(shell);
   return shell;
 }

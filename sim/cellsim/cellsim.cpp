@@ -649,6 +649,8 @@ class Cell {
 
   std::vector<std::string> valCommand(const std::string& line) {
     std::smatch m;
+    // An editor reads every line as a program line: WHERE or ABORT typed into it do nothing.
+    if (editing_) return programLine(line);
     if (std::regex_match(line, m, where_re_)) {
       auto lines =
           drivers::formatWhere(val_dialect_.config(), where_layout_, location(), quantised());
@@ -669,7 +671,6 @@ class Cell {
       speed_ = s;
       return {};
     }
-    if (editing_) return programLine(line);
     if (std::regex_match(line, m, path_edit_re_)) {
       editing_ = true;  // a fresh program: what was there before is replaced
       program_.clear();
@@ -718,8 +719,12 @@ class Cell {
     ++moves_;
     motion_.emplace(toJoints(joints_), waypoints,
                     o_.joint_speed_deg_s * speed_ / 100.0 * o_.time_scale, blend_deg);
-    // Each joint's backlash takes the side of the final approach.
-    approach_ = approachOf(motion_->lastFrom(), motion_->target(), approach_);
+    // Each joint's backlash takes the side of its last motion along the path.
+    JointsDeg from = toJoints(joints_);
+    for (const JointsDeg& to : waypoints) {
+      approach_ = approachOf(from, to, approach_);
+      from = to;
+    }
     move_travel_mm_ =
         (toolPosition(toArray(motion_->target())) - toolPosition(toArray(motion_->lastFrom())))
             .norm();

@@ -58,7 +58,8 @@ class CellIo {
   // one step, one move() a step. The watch and the errors as move(); a watch that stops it stops
   // the whole path.
   virtual MoveOutcome moveThrough(const std::vector<JointsDeg>& path, const MoveWatch& watch) {
-    MoveOutcome out{where(), false};
+    if (path.empty()) return {where(), false};
+    MoveOutcome out;
     for (const JointsDeg& step : path)
       if (out = move(step, watch); out.stopped) break;
     return out;

@@ -107,7 +107,10 @@ class ValController {
   // `steps_deg` (the last is the target), one line at a time, each line only after the previous
   // one was accepted, runs it, and polls WHERE as a move does until the arm is still at the last
   // step. DriverError when the dialect offers no path program (offersPaths()) or a step is not a
-  // number; a line the controller refuses ends it before anything runs.
+  // number; a line the controller refuses ends it before anything runs (a refused MOVE line:
+  // the editor is left with path_end_edit; a refused or lost EDIT or E is not followed by
+  // anything, since a bare E at the monitor may be an abbreviation of EXECUTE). `progress` also
+  // sees one WHERE between the program and its execution.
   bool offersPaths() const { return !dialect_.config().path_execute_command.empty(); }
   void asyncMovePath(const std::vector<Joints6>& steps_deg, WhereHandler handler,
                      ProgressHandler progress = {});

@@ -277,9 +277,10 @@ class ShellPlanner {
                               JointsDeg& pre_q) const;
   // Marks the vias to stop at (moving through vias), then sums the shell up.
   void finishShell(ShellPlan& shell) const;
-  // Moving through vias: each stretch between two stops whose blended path breaks a rule stops at
-  // the via nearest the problem, until every stretch is safe.
-  void markBlendStops(ShellPlan& shell) const;
+  // Moving through vias: from step first_step on, the arm at `from`, each stretch between two
+  // stops whose blended path breaks a rule stops at the via nearest the problem, until every
+  // stretch is safe.
+  void markBlendStops(ShellPlan& shell, std::size_t first_step, JointsDeg from) const;
   // The planned time of `step` reached from `from`: its move, and the settle at a point.
   double stepDuration(const JointsDeg& from, const PlanStep& step) const;
   Node nodeFor(const Connection& c, double radius, double lat_deg, double lon_deg,
