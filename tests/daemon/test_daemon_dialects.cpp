@@ -12,6 +12,23 @@ using namespace robocal;
 using namespace robocal::test;
 using json = nlohmann::json;
 
+namespace {
+
+// Starts a run, answers its prompts until it is done and returns the SAMPLEs it streamed.
+int runToDone(Cell& cell, proto::Client& client) {
+  REQUIRE(client.request({{"cmd", "start"}, {"token", cell.daemon->token()}}, 30, "ACK")["class"] ==
+          "ACK");
+  std::vector<json> seen;
+  const std::string end = cell.operate(client, {"done", "paused", "error", "aborted"}, 180, &seen);
+  INFO(cell.daemon->logText().substr(0, 6000));
+  REQUIRE(end == "done");
+  int samples = 0;
+  for (const json& o : seen) samples += o["class"] == "SAMPLE";
+  return samples;
+}
+
+}  // namespace
+
 TEST_CASE("a run in each controller dialect preset reaches DONE", "[e2e][dialects]") {
   struct Case {
     std::string dialect;
@@ -24,16 +41,7 @@ TEST_CASE("a run in each controller dialect preset reaches DONE", "[e2e][dialect
                 R"({"val": {"dialect": ")" + c.dialect + R"("}})");
       auto client = cell.daemon->client();
       client->send({{"cmd", "watch"}, {"enable", true}});
-      const json ack =
-          client->request({{"cmd", "start"}, {"token", cell.daemon->token()}}, 30, "ACK");
-      REQUIRE(ack["class"] == "ACK");
-      std::vector<json> seen;
-      const std::string end =
-          cell.operate(*client, {"done", "paused", "error", "aborted"}, 180, &seen);
-      INFO(cell.daemon->logText().substr(0, 6000));
-      REQUIRE(end == "done");
-      int samples = 0;
-      for (const json& o : seen) samples += o["class"] == "SAMPLE";
+      const int samples = runToDone(cell, *client);
       const json result = client->request({{"cmd", "result"}}, 10, "RESULT");
       REQUIRE(result["class"] == "RESULT");
       CHECK(static_cast<int>(loadSamplesFile(result["samples_file"].get<std::string>()).size()) ==
@@ -85,16 +93,7 @@ TEST_CASE("a plan through vias runs each point's vias as one path program, twice
   long paths_before = 0;
   for (int run = 1; run <= 2; ++run) {
     INFO("run " << run);
-    REQUIRE(client->request({{"cmd", "start"}, {"token", cell.daemon->token()}}, 30,
-                            "ACK")["class"] == "ACK");
-    std::vector<json> seen;
-    const std::string end =
-        cell.operate(*client, {"done", "paused", "error", "aborted"}, 180, &seen);
-    INFO(cell.daemon->logText().substr(0, 6000));
-    REQUIRE(end == "done");
-    int samples = 0;
-    for (const json& o : seen) samples += o["class"] == "SAMPLE";
-    CHECK(samples >= 8);
+    CHECK(runToDone(cell, *client) >= 8);
     const long paths = std::stol(cell.sim->status("paths"));
     CHECK(paths > paths_before);  // points reached through vias, each by one program
     paths_before = paths;

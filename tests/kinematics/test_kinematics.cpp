@@ -1,5 +1,7 @@
 #include <catch2/catch.hpp>
 
+#include "joints.hpp"
+
 #include <robocal/kinematics/ik.hpp>
 #include <robocal/kinematics/kinematics.hpp>
 #include <robocal/kinematics/units.hpp>
@@ -11,11 +13,7 @@ using namespace robocal;
 
 namespace {
 
-JointsDeg deg(double a, double b, double c, double d, double e, double f) {
-  JointsDeg q;
-  q << a, b, c, d, e, f;
-  return q;
-}
+using test::deg;
 
 // Corke's PUMA 560 chain with no base or tool transform, as his toolbox computes it.
 Kinematics corkeChain() {

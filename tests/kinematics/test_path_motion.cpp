@@ -1,17 +1,14 @@
 // The blended path model robocal-cellsim runs and the planner checks (path_motion.hpp).
 #include <catch2/catch.hpp>
 
+#include "joints.hpp"
+
 #include <robocal/kinematics/path_motion.hpp>
 
 using namespace robocal;
+using test::deg;
 
 namespace {
-
-JointsDeg joints(double a, double b, double c, double d, double e, double f) {
-  JointsDeg q;
-  q << a, b, c, d, e, f;
-  return q;
-}
 
 double maxDiff(const JointsDeg& a, const JointsDeg& b) {
   return (a - b).cwiseAbs().maxCoeff();
@@ -21,10 +18,10 @@ double maxDiff(const JointsDeg& a, const JointsDeg& b) {
 
 TEST_CASE("a path: through every via unblended, corners cut inside when blended",
           "[kinematics][paths]") {
-  const JointsDeg start = joints(0, 45, -90, 0, 45, 0);
+  const JointsDeg start = deg(0, 45, -90, 0, 45, 0);
   // Three steps of 10 deg of joint 1 each; joint 2 at 2, then 3, then 2 deg a step.
-  const std::vector<JointsDeg> steps{joints(10, 47, -88, 0, 45, 0), joints(20, 50, -86, 2, 45, 0),
-                                     joints(30, 52, -85, 4, 44, 0)};
+  const std::vector<JointsDeg> steps{deg(10, 47, -88, 0, 45, 0), deg(20, 50, -86, 2, 45, 0),
+                                     deg(30, 52, -85, 4, 44, 0)};
   const PathMotion linear(start, steps, 10, 0);
   CHECK(linear.durationS() == Approx(3.0));  // 10 deg of joint 1 a segment at 10 deg/s
   CHECK(linear.reachedS(2) == Approx(2.0));
