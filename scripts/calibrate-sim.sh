@@ -85,7 +85,10 @@ echo "== the result"
 "$bin" result --port "$port" --json >"$out/result.json"
 samples_file=$(grep -o '"samples_file":"[^"]*"' "$out/result.json" | cut -d'"' -f4)
 run_dir=$(dirname "$samples_file")
-echo "simulated bar: $("$bin" cellsim "$out/cellsim.sock" status | grep -o 'broken_events=[0-9]*') (over-range events)"
+sim_status=$("$bin" cellsim "$out/cellsim.sock" status)
+field() { grep -o "$1=[^ ]*" <<<"$sim_status" | cut -d= -f2; }
+echo "simulated bar: broken_events=$(field broken_events) (over-range events), largest deflection while moving $(field moving_peak_mm) mm"
+echo "simulated robot: $(field moves) motions, $(field paths) of them path programs through vias (motion.through_vias)"
 echo "re-centring moves: $(grep -c '"recentre"' "$run_dir/events.jsonl" || true), re-plans: $(grep -c '"replan"' "$run_dir/events.jsonl" || true)"
 echo
 echo "== the calibrated model against the simulated truth (all samples of the run, refitted)"
