@@ -67,10 +67,15 @@ int run(const std::vector<std::string>& argv) {
                 violations.size(), plan.shells.size(), steps);
     return 1;
   }
+  char blended[120] = "";
+  if (plan.cell.motion.through_vias)
+    std::snprintf(blended, sizeof blended,
+                  ", and so does the path blended through the vias (blend %.1f deg)",
+                  plan.cell.motion.blend_deg);
   std::printf(
       "%s: OK: %zu shells, %d poses and every move between them keep the rules "
-      "(deviation within +/-%.3f mm)\n",
-      path.c_str(), plan.shells.size(), steps, cell.motion.via_tolerance_mm);
+      "(deviation within +/-%.3f mm)%s\n",
+      path.c_str(), plan.shells.size(), steps, cell.motion.via_tolerance_mm, blended);
   return 0;
 }
 
