@@ -492,13 +492,15 @@ ShellPlanner::BlendProblem ShellPlanner::blendedPathProblem(const Connection& c,
                                                             const JointsDeg& from,
                                                             const std::vector<JointsDeg>& steps,
                                                             double tolerance_mm) const {
-  if (steps.size() < 2) return {};
+  // Unblended, the path is its segments, each checked on its own (segmentOk, checkPlan).
+  const double blend = cell_.motion.blend_deg;
+  if (steps.size() < 2 || blend <= 0) return {};
   // Time in degrees of travel: the blend's window is the same at every speed.
-  const PathMotion path(from, steps, 1.0, cell_.motion.blend_deg);
-  // A sample every this many degrees of the largest joint's travel moves the ball at most about
-  // sample_step_mm: a 2.5 m lever, for the ball's distance from the axes summed over the joints
-  // that turn together (walkSegment measures instead; a blended path has no straight segment).
-  const double step_deg = cell_.motion.sample_step_mm / 2500.0 * kDegPerRad;
+  const PathMotion path(from, steps, 1.0, blend);
+  // What the blend adds to the segments is smooth at the scale of its window (a corner cut over
+  // blend_deg): 16 samples a window find its worst, or a sample every sample_step_mm of the ball
+  // (a metre's lever) where that is coarser. The segments themselves are checked finely elsewhere.
+  const double step_deg = std::max(blend / 16, cell_.motion.sample_step_mm / 1000.0 * kDegPerRad);
   const double end = path.durationS();
   for (double t = 0; t < end + step_deg; t += step_deg) {
     const double at = std::min(t, end);
@@ -506,7 +508,7 @@ ShellPlanner::BlendProblem ShellPlanner::blendedPathProblem(const Connection& c,
     if (problem.empty()) continue;
     std::size_t nearest = 0;
     // The blended arm is half a blend behind the linear path.
-    const double lag = cell_.motion.blend_deg / 2;
+    const double lag = blend / 2;
     for (std::size_t k = 1; k < steps.size(); ++k)
       if (std::abs(path.reachedS(k + 1) + lag - at) <
           std::abs(path.reachedS(nearest + 1) + lag - at))
@@ -536,8 +538,10 @@ void ShellPlanner::markBlendStops(ShellPlan& shell, std::size_t first_step, Join
   }
 }
 
-void ShellPlanner::finishShell(ShellPlan& shell) const {
-  if (cell_.motion.through_vias) markBlendStops(shell, 0, shell.connect.joints_deg);
+void ShellPlanner::finishShell(ShellPlan& shell, std::size_t first_step,
+                               const JointsDeg* from) const {
+  if (cell_.motion.through_vias)
+    markBlendStops(shell, first_step, from ? *from : shell.connect.joints_deg);
   ShellSummary& s = shell.summary;
   s.points = s.vias = 0;
   s.duration_s = 0;
@@ -999,9 +1003,8 @@ ShellPlan ShellPlanner::replanRemaining(const ShellPlan& old, std::size_t next_s
     prev = node;
   }
   // The arm goes on from `current`, not from the step before next_step: its first blended
-  // stretch is checked from there (finishShell checks the shell from its connect pose as well).
-  if (cell_.motion.through_vias) markBlendStops(shell, next_step, current);
-  finishShell(shell);
+  // stretch is checked from there, and what it has done is not checked again.
+  finishShell(shell, next_step, &current);
   return shell;
 }
 

@@ -275,8 +275,10 @@ class ShellPlanner {
   // is safe: planApproach and an optimal plan's candidates judge it the same way.
   std::string approachProblem(const Connection& c, double radius, const JointsDeg& q,
                               JointsDeg& pre_q) const;
-  // Marks the vias to stop at (moving through vias), then sums the shell up.
-  void finishShell(ShellPlan& shell) const;
+  // Marks the vias to stop at (moving through vias) from step first_step on, the arm at `from`
+  // (the connect pose when null), then sums the shell up.
+  void finishShell(ShellPlan& shell, std::size_t first_step = 0,
+                   const JointsDeg* from = nullptr) const;
   // Moving through vias: from step first_step on, the arm at `from`, each stretch between two
   // stops whose blended path breaks a rule stops at the via nearest the problem, until every
   // stretch is safe.
