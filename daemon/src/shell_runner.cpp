@@ -471,12 +471,9 @@ void ShellRunner::measure(const ShellPlan& planned, int already, JointsDeg q) {
   std::size_t next = 0;
   while (next < shell.steps.size()) {
     // The steps up to where the arm stops: this one, or, moving through vias, the next point.
-    std::vector<JointsDeg> path;
-    std::size_t stop = next;
-    for (;; ++stop) {
-      path.push_back(shell.steps[stop].joints_deg);
-      if (stop + 1 == shell.steps.size() || stopsAt(cell_.motion, shell.steps[stop])) break;
-    }
+    const Stretch stretch = stretchFrom(cell_.motion, shell.steps, next);
+    const std::vector<JointsDeg>& path = stretch.joints_deg;
+    const std::size_t stop = stretch.last;
     const PlanStep& step = shell.steps[stop];
     if (ctx_.config.centering) {
       const RunContext::Moved moved = ctx_.moveRecentring(path);

@@ -46,12 +46,10 @@ void checkBlendedPaths(const ShellPlanner& planner, const ShellPlan& shell, doub
   const MotionSettings& motion = planner.cell().motion;
   JointsDeg from = shell.connect.joints_deg;
   for (std::size_t first = 0; first < shell.steps.size();) {
-    std::size_t last = first;
-    while (last + 1 < shell.steps.size() && !stopsAt(motion, shell.steps[last])) ++last;
-    std::vector<JointsDeg> path;
-    for (std::size_t k = first; k <= last; ++k) path.push_back(shell.steps[k].joints_deg);
-    const ShellPlanner::BlendProblem p =
-        planner.blendedPathProblem(shell.connection, shell.radius_mm, from, path, tol);
+    const Stretch stretch = stretchFrom(motion, shell.steps, first);
+    const std::size_t last = stretch.last;
+    const ShellPlanner::BlendProblem p = planner.blendedPathProblem(
+        shell.connection, shell.radius_mm, from, stretch.joints_deg, tol);
     if (!p.problem.empty())
       add(static_cast<int>(first + p.nearest_step), ruleOf(p.problem),
           "on the path blended through the vias from step " + std::to_string(first) + " to " +

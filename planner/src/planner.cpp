@@ -521,12 +521,10 @@ ShellPlanner::BlendProblem ShellPlanner::blendedPathProblem(const Connection& c,
 void ShellPlanner::markBlendStops(ShellPlan& shell, std::size_t first_step, JointsDeg from) const {
   const double tolerance = kPlannerToleranceFraction * cell_.motion.via_tolerance_mm;
   for (std::size_t first = first_step; first < shell.steps.size();) {
-    std::size_t last = first;  // the stretch first..last, where the arm stops
-    while (last + 1 < shell.steps.size() && !stopsAt(cell_.motion, shell.steps[last])) ++last;
-    std::vector<JointsDeg> path;
-    for (std::size_t k = first; k <= last; ++k) path.push_back(shell.steps[k].joints_deg);
+    const Stretch stretch = stretchFrom(cell_.motion, shell.steps, first);
+    const std::size_t last = stretch.last;
     const BlendProblem p =
-        blendedPathProblem(shell.connection, shell.radius_mm, from, path, tolerance);
+        blendedPathProblem(shell.connection, shell.radius_mm, from, stretch.joints_deg, tolerance);
     if (p.problem.empty()) {
       from = shell.steps[last].joints_deg;
       first = last + 1;

@@ -43,6 +43,20 @@ inline bool stopsAt(const MotionSettings& motion, const PlanStep& step) {
   return step.kind == StepKind::kPoint || !motion.through_vias || step.stop;
 }
 
+// The stretch the arm runs from steps[first] on without coming to rest: its last step (the first
+// one from there it stops at, or the shell's last) and the joints of first..last.
+struct Stretch {
+  std::size_t last = 0;
+  std::vector<JointsDeg> joints_deg;
+};
+inline Stretch stretchFrom(const MotionSettings& motion, const std::vector<PlanStep>& steps,
+                           std::size_t first) {
+  Stretch s{first, {}};
+  while (s.last + 1 < steps.size() && !stopsAt(motion, steps[s.last])) ++s.last;
+  for (std::size_t k = first; k <= s.last; ++k) s.joints_deg.push_back(steps[k].joints_deg);
+  return s;
+}
+
 // Where a point at `q` is approached from: every joint `step_deg` below it, and one joint
 // further so that the bar between `ball` (tool frame) and `chuck` keeps its length at q (that
 // joint at most 1 deg below q, so where it cannot, the pose check drops the point): each joint
