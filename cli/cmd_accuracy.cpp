@@ -32,7 +32,9 @@ arm's whole range (beyond where the user works: what the calibration does not co
                         the one recorded in CALIBRATED              [the recorded one, else
                         the built-in model of its name; else required]
   --truth FILE          a simulation's true robot (robocal simulate --truth-out); with its
-                        realism, judged warm, approaching in +, with its payload
+                        realism, judged warm, with its payload, each target reached as the
+                        output commands it: up from its pre-point when the model records
+                        an approach, else from either side (as the nominal joints)
   --cell FILE           cell file: its work_volume section
   --poses FILE          targets CSV instead of the work volume
   --whole-range N       N joint vectors drawn within the arm's limits instead (their nominal

@@ -54,16 +54,18 @@ points. Every plan's summary ends with its predicted work-volume error and its c
                    predicted error in the work volume and over the arm's whole range, so
                    that the plan stays robust off its volume; 0: the work volume alone  [0.1]
   --compliance     plan for a fit that also identifies the gravity compliance of the joints
-                   carrying the arm's weight (robocal solve --compliance): their twist is
-                   designed for and its uncertainty is in the predicted errors. Needs the
-                   model's "compliance" load
+                   carrying the arm's weight (as robocal solve does): their twist is
+                   designed for and its uncertainty is in the predicted errors. The
+                   default when the model has its "compliance" load; with this option a
+                   model without it is refused
+  --rigid          plan for a fit of the 54 parameters alone (robocal solve --rigid)
   --quiet          print only the totals, not each shell and dropped point
 )";
 
 int run(const std::vector<std::string>& argv) {
   const Args args(
       argv, {"model", "cell", "out", "time-budget-min", "points", "noise-mm", "whole-range-weight"},
-      {"help", "quiet", "check", "compliance"});
+      {"help", "quiet", "check", "compliance", "rigid"});
   if (args.flag("help")) {
     std::fputs(kHelp, stdout);
     return 0;
@@ -80,14 +82,18 @@ int run(const std::vector<std::string>& argv) {
   design.points = static_cast<int>(args.number("points", 0));
   design.noise_sigma_mm = args.number("noise-mm", design.noise_sigma_mm);
   design.whole_range_weight = args.number("whole-range-weight", kWholeRangeWeight);
-  design.compliance = args.flag("compliance");
+  if (args.flag("compliance") && args.flag("rigid"))
+    throw UsageError("--compliance and --rigid: give one");
+  // A calibration is fitted with the twist when the model has the load (robocal solve's default).
+  design.compliance =
+      args.flag("compliance") || (!args.flag("rigid") && !check && model.compliance.has_value());
   if (design.budget_s < 0 || design.points < 0 || design.noise_sigma_mm <= 0 ||
       !(design.whole_range_weight >= 0))
     throw UsageError(
         "--time-budget-min, --points and --whole-range-weight must be >= 0, --noise-mm > 0");
   const bool optimal = design.budget_s > 0 || design.points > 0;
   if (optimal && check) throw UsageError("--check plans a fixed health check: no budget");
-  if (check && design.compliance)
+  if (check && args.flag("compliance"))
     throw UsageError("--compliance designs a calibration; a health check is not fitted");
   if (design.compliance && !model.compliance) {
     std::fprintf(stderr,

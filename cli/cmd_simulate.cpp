@@ -130,11 +130,16 @@ int run(const std::vector<std::string>& argv) {
   double worst_offset_mm = 0;
   // The shells: the plan's, or the simulator's own grid on each connection.
   std::vector<std::pair<ShellRequest, ShellPoses>> shells;
+  // How every point is reached, recorded with it: the plan's approach pre-points, else none
+  // (the simulator's own grid goes straight from point to point).
+  double approach_deg = 0;
   if (args.has("plan")) {
     for (const char* option :
          {"connections", "bar-mm", "extension-mm", "points-per-shell", "first-shell"})
       if (args.has(option)) throw UsageError(std::string("--plan excludes --") + option);
-    for (const ShellPlan& s : loadPlanFile(args.get("plan", "")).shells) {
+    const Plan plan = loadPlanFile(args.get("plan", ""));
+    approach_deg = plan.cell.motion.approach_deg;
+    for (const ShellPlan& s : plan.shells) {
       ShellRequest req;
       req.connection = s.connection;
       req.radius_mm = s.radius_mm;
@@ -168,6 +173,7 @@ int run(const std::vector<std::string>& argv) {
   for (const auto& [req, poses] : shells) {
     const Connection& c = req.connection;
     auto shell_samples = measureShell(true_robot, req, poses.poses, noise, noise_rng, track);
+    for (Sample& s : shell_samples) s.approach_deg = approach_deg;
     for (const ShellPose& p : poses.poses) {
       const Eigen::Vector3d& ball = nominal.balls_mm[c.ball_index];
       worst_offset_mm = std::max(worst_offset_mm, (true_kin.ballPosition(p.joints_deg, ball) -

@@ -46,14 +46,19 @@ no model and exits with 3, unless --allow-partial is given.
                           against it, its backlash, compliance and warm-up included
   --cell FILE             judge the predicted accuracy over this cell file's work_volume
                           (docs/compensation.md)              [the reference cell's]
-  --approach-deg D        the samples' points were each reached moving up by D deg in
-                          every joint (the plan's motion.approach_deg): recorded in the
-                          model, so that compensate reaches targets the same way  [0]
+  --approach-deg D        for samples that do not record it (no approach_deg column):
+                          their points were each reached moving up by D deg in every
+                          joint (the plan's motion.approach_deg). The model records it,
+                          so that compensate reaches targets the same way
+                                                           [the samples' record, else 0]
   --compliance            identify the gravity compliance of the joints that carry the
                           arm's weight with the 54 parameters, from the model's load
                           (its "compliance": link masses, the fixture; docs/accuracy.md);
                           kept when the data tell it from noise: the calibrated model
-                          carries it, and compensate uses it
+                          carries it, and compensate uses it. The default when the model
+                          has the load; with this option a model without it is refused
+  --rigid                 fit the 54 parameters alone, no compliance (its prediction over
+                          the arm's whole range then leaves out the twist)
   --max-iterations N      LM iteration cap                                         [100]
   --json                  one JSON object instead of text
 
@@ -182,11 +187,35 @@ TrueBallMm trueBalls(TrueRobot truth, double approach_deg) {
   };
 }
 
+// How the samples' points were approached, as the model records it (compensate then writes the
+// same pre-points): what the samples say, or --approach-deg for a file that does not say.
+double samplesApproachDeg(const std::vector<Sample>& samples, std::optional<double> flag_deg) {
+  std::size_t unrecorded = 0;
+  const std::optional<double> recorded = recordedApproachDeg(samples, &unrecorded);
+  if (recorded && flag_deg && std::abs(*recorded - *flag_deg) > 1e-9) {
+    char text[160];
+    std::snprintf(text, sizeof text,
+                  "--approach-deg %.4f: the samples record %.4f deg (their approach_deg column): "
+                  "leave the option out, the record is used",
+                  *flag_deg, *recorded);
+    throw UsageError(text);
+  }
+  if (recorded) return *recorded;
+  if (flag_deg) return *flag_deg;
+  std::fprintf(stderr,
+               "robocal solve: warning: %zu of %zu samples do not record how their points were "
+               "approached (no approach_deg: a file written before it was recorded); the model "
+               "assumes no one-sided approach and compensate will write no pre-points. If the "
+               "plan had motion.approach_deg D, fit again with --approach-deg D\n",
+               unrecorded, samples.size());
+  return 0;
+}
+
 int run(const std::vector<std::string>& argv) {
   const Args args(argv,
                   {"model", "out", "validate", "report", "outlier-sigmas", "truth",
                    "max-iterations", "cell", "approach-deg"},
-                  {"json", "drop-outliers", "allow-partial", "compliance", "help"});
+                  {"json", "drop-outliers", "allow-partial", "compliance", "rigid", "help"});
   if (args.flag("help")) {
     std::fputs(kHelp, stdout);
     return 0;
@@ -201,13 +230,15 @@ int run(const std::vector<std::string>& argv) {
     origin.samples_files.push_back(absolutePath(path));
   }
   if (samples.empty()) throw UsageError("the samples files hold no samples");
-  origin.approach_deg = approachDegArg(args).value_or(0);
+  origin.approach_deg = samplesApproachDeg(samples, approachDegArg(args));
   AssessOptions options;
   options.outlier_sigmas = args.number("outlier-sigmas", options.outlier_sigmas);
   if (options.outlier_sigmas <= 0) throw UsageError("--outlier-sigmas must be positive");
   options.drop_outliers = args.flag("drop-outliers");
-  options.identify_compliance = args.flag("compliance");
-  if (options.identify_compliance && !nominal.compliance)
+  if (args.flag("compliance") && args.flag("rigid"))
+    throw UsageError("--compliance and --rigid: give one");
+  options.identify_compliance = !args.flag("rigid");
+  if (args.flag("compliance") && !nominal.compliance)
     throw UsageError("--compliance: the model " + args.required("model") +
                      " has no \"compliance\" object (link masses and the fixture's: "
                      "docs/model-format.md)");

@@ -9,7 +9,7 @@
 # ROBOCAL_CELL: another cell file (e.g. with motion.approach_deg set).
 # ROBOCAL_WHOLE_RANGE=N judges N joint vectors over the arm's whole range instead of the work
 # volume (robocal accuracy --whole-range).
-# ROBOCAL_SOLVE_ARGS: more options for robocal solve (e.g. --compliance).
+# ROBOCAL_SOLVE_ARGS: more options for robocal solve (e.g. --rigid: no compliance).
 # ROBOCAL_PLAN_ARGS: more options for robocal plan (e.g. --time-budget-min 90).
 # ROBOCAL_NOISE_MM: the bar's reading noise (default the paper's 0.084 mm).
 # ROBOCAL_MODEL: another nominal model (e.g. with its chucks placed elsewhere on the table).

@@ -15,8 +15,8 @@
 # ROBOCAL_PLAN_BUDGET_MIN=M runs an optimal plan of M minutes of cell time instead of the
 # cell's grid (docs/cell-time.md). ROBOCAL_ROBOT=rx160 calibrates a Staubli RX160 under V+
 # instead of the PUMA 560 under VAL II (docs/robots.md). ROBOCAL_MODEL: another nominal model of
-# that robot (e.g. its chucks placed apart: docs/accuracy.md, "Chucks placed apart").
-# ROBOCAL_SOLVE_ARGS: more options for the final fit (e.g. --compliance).
+# that robot (e.g. config/puma560-paper.json: the paper's compact fixture, docs/accuracy.md).
+# ROBOCAL_SOLVE_ARGS: more options for the final fit (e.g. --rigid: no compliance).
 # ROBOCAL_THROUGH_VIAS=true moves from point to point through the vias without stopping
 # (motion.through_vias: a path program a point, blended by cellsim; docs/cell-time.md).
 set -euo pipefail
@@ -93,13 +93,17 @@ echo "re-centring moves: $(grep -c '"recentre"' "$run_dir/events.jsonl" || true)
 echo
 echo "== the calibrated model against the simulated truth (all samples of the run, refitted)"
 # shellcheck disable=SC2086  # the options are words
+# (the samples record how each point was approached: the model records it, compensate repeats it)
 "$bin" solve --model "$model" "$run_dir/samples.csv" --truth "$out/truth.json" \
-  --approach-deg "$(jq .motion.approach_deg "$cell")" ${ROBOCAL_SOLVE_ARGS:-} \
-  --out "$out/calibrated.json" --report "$out/report"
+  ${ROBOCAL_SOLVE_ARGS:-} --out "$out/calibrated.json" --report "$out/report"
 echo
 echo "== where the user works: the true robot commanded with nominal and with compensated joints"
 "$bin" accuracy --nominal "$model" --calibrated "$out/calibrated.json" --truth "$out/truth.json" \
   --cell "$cell" --svg "$out/accuracy.svg"
+echo
+echo "== beyond it, over the arm's whole range (1,000 joint vectors within its limits): the same"
+"$bin" accuracy --nominal "$model" --calibrated "$out/calibrated.json" --truth "$out/truth.json" \
+  --whole-range 1000
 echo
 echo "== the verdict (robocald's last fit, as RESULT and the console give it)"
 "$bin" result --port "$port"

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <random>
 #include <stdexcept>
 
@@ -99,6 +100,18 @@ AccuracyReport assessAccuracyAtJoints(const Compensator& compensator,
 
 namespace {
 
+// The side each joint comes from into target i of a program without pre-points: either, the same
+// for every run (a fixed hash of the index, each joint its own bits).
+Approach eitherSide(std::size_t i) {
+  std::uint64_t h = (i + 1) * 0x9E3779B97F4A7C15ull;
+  h ^= h >> 31;
+  h *= 0xBF58476D1CE4E5B9ull;
+  h ^= h >> 29;
+  Approach side{};
+  for (int j = 0; j < kJointCount; ++j) side[j] = (h >> (7 * j + 3)) & 1 ? 1 : -1;
+  return side;
+}
+
 AccuracyReport assess(const Compensator& compensator, std::size_t count,
                       const std::function<CompensatedTarget(std::size_t)>& target_at,
                       const TrueRobot* truth) {
@@ -107,10 +120,9 @@ AccuracyReport assess(const Compensator& compensator, std::size_t count,
   r.has_truth = truth != nullptr;
   std::optional<Kinematics> true_kin;
   if (truth) true_kin.emplace(truth->modelAt(1e6));  // warm
-  // Where the true robot's tool is at commanded readings, reached as the target says (up in every
-  // joint from its pre-point; without one, up as well: one of the ways a program may come).
-  const auto true_tool = [&](const JointsDeg& q) {
-    return true_kin->toolPose(truth->effectiveReadings(q, kPositiveApproach));
+  // Where the true robot's tool is at commanded readings reached with `approach`.
+  const auto true_tool = [&](const JointsDeg& q, const Approach& approach) {
+    return true_kin->toolPose(truth->effectiveReadings(q, approach));
   };
   const Eigen::Isometry3d& tool = compensator.options().tool;
   std::vector<double> pred_pos, pred_ori, nom_pos, nom_ori, comp_pos, comp_ori, model_pos,
@@ -120,8 +132,16 @@ AccuracyReport assess(const Compensator& compensator, std::size_t count,
     a.target = target_at(i);
     const Eigen::Isometry3d& pose = a.target.target;
     if (true_kin) {
-      const Eigen::Isometry3d at_nominal = true_tool(a.target.nominal_joints_deg) * tool;
-      const Eigen::Isometry3d at_compensated = true_tool(a.target.joints_deg) * tool;
+      // Each target is reached as the output commands it: up in every joint from its pre-point
+      // when it has one; without, from whichever side the program came (a plain program, the
+      // nominal joints included, has no pre-points).
+      const Approach program_side = eitherSide(i);
+      const Eigen::Isometry3d at_nominal =
+          true_tool(a.target.nominal_joints_deg, program_side) * tool;
+      const Eigen::Isometry3d at_compensated =
+          true_tool(a.target.joints_deg,
+                    a.target.hasApproach() ? kPositiveApproach : program_side) *
+          tool;
       a.nominal_commanded = poseDifference(at_nominal, pose);
       a.compensated_commanded = poseDifference(at_compensated, pose);
       a.calibrated_model =

@@ -4,6 +4,7 @@
 #include <robocal/kinematics/twist.hpp>
 #include <robocal/kinematics/units.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -73,6 +74,11 @@ Compensator::Compensator(const Model& nominal, const Model& calibrated, Compensa
       throw std::invalid_argument(
           "the calibrated model's covariance is neither 54 x 54 nor, with a compliance, 60 x 60");
     // The 54's, then the twists' when the fit looked for the compliance (Model::covariance).
+    // Backlash not designed out: a target reached from either side has each joint off by half
+    // the backlash, one way or the other (a term of its own: compensation neither causes nor
+    // removes it, so its gain is judged without it).
+    if (approach_deg_ <= 0)
+      unapproached_half_backlash_rad_ = 0.5 * options_.priors.backlash_deg * kRadPerDeg;
     for (int i = 0; i < c.rows(); ++i)
       if (c(i, i) > 0) estimated_.push_back(i);
     const int n = static_cast<int>(estimated_.size());
@@ -91,6 +97,14 @@ Eigen::Isometry3d Compensator::calibratedToolPose(const JointsDeg& q) const {
 }
 
 double Compensator::predictedPositionError(const JointsDeg& q) const {
+  return predictedPositionError(q, true);
+}
+
+double Compensator::predictedCalibrationError(const JointsDeg& q) const {
+  return predictedPositionError(q, false);
+}
+
+double Compensator::predictedPositionError(const JointsDeg& q, bool with_backlash) const {
   if (!calibrated().covariance) return std::numeric_limits<double>::quiet_NaN();
   const Kinematics& kin = calibrated_->kinematics();
   PositionJacobian full;
@@ -109,8 +123,14 @@ double Compensator::predictedPositionError(const JointsDeg& q) const {
   // The error the fit found the model does not contain (ModelProvenance::unmodelled_mm), seen by
   // the bar along one direction: sqrt(3) times it in 3D, in quadrature with the parameters' part.
   const double unmodelled_mm = calibrated().provenance ? calibrated().provenance->unmodelled_mm : 0;
+  // Each joint's backlash when targets are reached from either side (no approach recorded).
+  double backlash_mm2 = 0;
+  if (with_backlash)
+    for (int k = 0; k < kJointCount; ++k)
+      backlash_mm2 +=
+          (full.col(jointParamIndex(k)) * unapproached_half_backlash_rad_).squaredNorm();
   return std::sqrt(std::max(0.0, (j * covariance_ * j.transpose()).trace()) +
-                   3 * unmodelled_mm * unmodelled_mm);
+                   3 * unmodelled_mm * unmodelled_mm + backlash_mm2);
 }
 
 double Compensator::predictedOrientationError(const JointsDeg& q) const {
@@ -283,9 +303,12 @@ void Compensator::judgeCoverage(CompensatedTarget& t) const {
   // Not compensating leaves the tool where the calibrated model puts the nominal readings.
   const double correction_mm =
       (calibratedToolPose(t.nominal_joints_deg).translation() - t.target.translation()).norm();
-  if (t.predicted_position_error_mm > correction_mm) {
-    why << "the predicted error, " << t.predicted_position_error_mm << " mm, exceeds the "
-        << correction_mm << " mm correction";
+  // The calibration's own uncertainty against its correction: backlash not designed out is
+  // there with or without compensating.
+  const double calibration_mm = predictedCalibrationError(t.joints_deg);
+  if (calibration_mm > correction_mm) {
+    why << "the predicted error, " << calibration_mm << " mm, exceeds the " << correction_mm
+        << " mm correction";
     t.status = CompensationStatus::kNoGain;
     t.reason = why.str();
   }

@@ -59,11 +59,14 @@ void RunDir::appendSample(const Sample& s, double bar_spread_mm) {
     std::string header;
     std::getline(in, header);
     timed_ = header.find(std::string(",") + kSamplesTimeColumn) != std::string::npos;
+    approach_recorded_ =
+        header.find(std::string(",") + kSamplesApproachColumn) != std::string::npos;
   }
   char spread[32];
   std::snprintf(spread, sizeof spread, ",%.4f", bar_spread_mm);
-  appendTextFileDurably(file(kSamplesFile), formatSampleRow(s) + spread +
-                                                (*timed_ ? "," + formatSampleTime(s) : "") + "\n");
+  appendTextFileDurably(file(kSamplesFile),
+                        formatSampleRow(s) + spread + (*timed_ ? "," + formatSampleTime(s) : "") +
+                            (*approach_recorded_ ? "," + formatSampleApproach(s) : "") + "\n");
 }
 
 std::vector<Sample> RunDir::loadSamples() {
@@ -128,8 +131,9 @@ RunDir RunStore::create(const std::string& plan_text) {
   fs::create_directories(path);
   RunDir run(path);
   writeTextFileAtomic(run.file("plan.json"), plan_text);
-  writeTextFileAtomic(run.file(kSamplesFile),
-                      std::string(kSamplesHeader) + ",bar_spread_mm," + kSamplesTimeColumn + "\n");
+  writeTextFileAtomic(run.file(kSamplesFile), std::string(kSamplesHeader) + ",bar_spread_mm," +
+                                                  kSamplesTimeColumn + "," +
+                                                  kSamplesApproachColumn + "\n");
   run.setState({{"status", "running"}});
   syncDir(runs_dir_);
   return run;

@@ -523,6 +523,7 @@ JointsDeg ShellRunner::recordPoint(const ShellPlan& planned, const PlanStep& ste
   // Unix time: a run resumed after a restart keeps one clock (the drift of a reference pose).
   s.time_s =
       std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+  s.approach_deg = approachDeg();
   dir_.appendSample(s, m.spread_mm);  // on disk before the robot moves again
   timing.sample_on_disk = Clock::now();
   timing.bar_window_start = m.bar_window_start;
@@ -607,10 +608,13 @@ void ShellRunner::completeSet(std::size_t shell_index, bool only_unfitted) {
   else if (iso)
     fits_.launchIso(dir_, samples_, *plan_.iso);  // the test's figures, not a fit
   else
-    // The plan's approach, unless the cell the re-plans use has another: then the points were
-    // reached both ways and the model records the smaller (0: none assumed).
-    fits_.launch(dir_, samples_, extension_mm, set_index,
-                 std::min(plan_.cell.motion.approach_deg, cell_.motion.approach_deg));
+    fits_.launch(dir_, samples_, extension_mm, set_index, approachDeg());
+}
+
+double ShellRunner::approachDeg() const {
+  // The plan's approach, unless the cell the re-plans use has another: then some points were
+  // reached with the smaller, and the record (and the model) says that (0: none assumed).
+  return std::min(plan_.cell.motion.approach_deg, cell_.motion.approach_deg);
 }
 
 }  // namespace robocal::daemon

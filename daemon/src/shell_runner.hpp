@@ -52,6 +52,8 @@ class ShellRunner {
   // Dwells, measures and records a data point (on disk before the robot moves again); the actual
   // joints. StopRun when the shell's connection looks bad (ShellWatch).
   JointsDeg recordPoint(const ShellPlan& planned, const PlanStep& step, double point_planned_s);
+  // How far every joint rose into each data point (deg), as the samples record it.
+  double approachDeg() const;
   // An audited dwell's two readings compared (docs/settling.md), as a "dwell_audit" event; a
   // second failed audit turns the adaptive dwell off for the run.
   void auditDwell(const ShellPlan& planned, const PlanStep& step, const RunContext::Dwell& dwell,

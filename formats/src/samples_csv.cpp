@@ -15,18 +15,21 @@ namespace {
 constexpr std::array<const char*, 13> kColumns = {
     "shell", "ball", "chuck", "extension_mm", "lat_deg", "lon_deg",  "j1",
     "j2",    "j3",   "j4",    "j5",           "j6",      "length_mm"};
-constexpr double kMaxTimeS = 1e12;  // Unix time for 30,000 years: printed in a short field
+constexpr double kMaxTimeS = 1e12;      // Unix time for 30,000 years: printed in a short field
+constexpr double kMaxApproachDeg = 10;  // a pre-point further than this is no backlash take-up
 
 }  // namespace
 
 const char* const kSamplesHeader =
     "shell,ball,chuck,extension_mm,lat_deg,lon_deg,j1,j2,j3,j4,j5,j6,length_mm";
 const char* const kSamplesTimeColumn = "time_s";
+const char* const kSamplesApproachColumn = "approach_deg";
 
 std::vector<Sample> parseSamples(const std::string& text, const std::string& source) {
   std::vector<Sample> samples;
   std::array<int, kColumns.size()> column_of{};
-  int time_column = -1;  // the optional time_s
+  int time_column = -1;      // the optional time_s
+  int approach_column = -1;  // the optional approach_deg
   size_t header_fields = 0;
   bool have_header = false;
   csv::forEachLine(text, [&](int line_no, std::string_view line) {
@@ -43,7 +46,10 @@ std::vector<Sample> parseSamples(const std::string& text, const std::string& sou
                             kSamplesHeader + ")");
       }
       for (size_t f = 0; f < fields.size(); ++f)
-        if (fields[f] == kSamplesTimeColumn) time_column = static_cast<int>(f);
+        if (fields[f] == kSamplesTimeColumn)
+          time_column = static_cast<int>(f);
+        else if (fields[f] == kSamplesApproachColumn)
+          approach_column = static_cast<int>(f);
       header_fields = fields.size();
       have_header = true;
       return;
@@ -88,6 +94,14 @@ std::vector<Sample> parseSamples(const std::string& text, const std::string& sou
         throw FormatError(where + "column 'time_s': expected seconds within +/-1e12, got " +
                           std::string(field));
     }
+    if (approach_column >= 0 && !fields[approach_column].empty()) {  // empty: not known
+      const std::string_view field = fields[approach_column];
+      s.approach_deg = csv::number(field);
+      if (!s.approach_deg || *s.approach_deg < 0 || *s.approach_deg > kMaxApproachDeg)
+        throw FormatError(where + "column 'approach_deg': expected degrees from 0 to " +
+                          std::to_string(static_cast<int>(kMaxApproachDeg)) + ", got '" +
+                          std::string(field) + "'");
+    }
     s.source = source;
     s.source_line = line_no;
     samples.push_back(std::move(s));
@@ -114,13 +128,41 @@ std::string formatSampleTime(const Sample& s) {
   return buf;
 }
 
+std::string formatSampleApproach(const Sample& s) {
+  if (!s.approach_deg) return "";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.4f", *s.approach_deg);
+  return buf;
+}
+
 std::string formatSamples(const std::vector<Sample>& samples) {
   const bool timed = std::any_of(samples.begin(), samples.end(),
                                  [](const Sample& s) { return s.time_s.has_value(); });
-  std::string out = std::string(kSamplesHeader) + (timed ? ",time_s\n" : "\n");
+  const bool approached = std::any_of(samples.begin(), samples.end(),
+                                      [](const Sample& s) { return s.approach_deg.has_value(); });
+  std::string out = std::string(kSamplesHeader) +
+                    (timed ? std::string(",") + kSamplesTimeColumn : "") +
+                    (approached ? std::string(",") + kSamplesApproachColumn : "") + "\n";
   for (const Sample& s : samples)
-    out += formatSampleRow(s) + (timed ? "," + formatSampleTime(s) : "") + "\n";
+    out += formatSampleRow(s) + (timed ? "," + formatSampleTime(s) : "") +
+           (approached ? "," + formatSampleApproach(s) : "") + "\n";
   return out;
+}
+
+std::optional<double> recordedApproachDeg(const std::vector<Sample>& samples,
+                                          std::size_t* unrecorded) {
+  std::optional<double> smallest;
+  std::size_t missing = 0;
+  for (const Sample& s : samples) {
+    if (!s.approach_deg) {
+      ++missing;
+      continue;
+    }
+    smallest = smallest ? std::min(*smallest, *s.approach_deg) : *s.approach_deg;
+  }
+  if (unrecorded) *unrecorded = missing;
+  if (missing > 0) return std::nullopt;
+  return smallest;
 }
 
 std::vector<Sample> loadSamplesFile(const std::string& path) {

@@ -92,7 +92,8 @@ FitAssessment assessFit(const Model& nominal, std::vector<Sample> samples,
   // The start of the fit: the nominal, with the identified compliance when it is identified.
   Model start = nominal;
   const auto fitSamples = [&](const std::vector<Sample>& fitted) {
-    if (!options.identify_compliance) return solveCalibration(nominal, fitted, options.solve);
+    if (!options.identify_compliance || !nominal.compliance)
+      return solveCalibration(nominal, fitted, options.solve);
     a.compliance.emplace();
     SolveResult fit = solveWithCompliance(nominal, fitted, options.solve, *a.compliance);
     start.compliance = a.compliance->compliance;

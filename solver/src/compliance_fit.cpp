@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <random>
 #include <stdexcept>
 
 namespace robocal {
@@ -31,7 +32,33 @@ std::array<double, kJointCount> rmsTorques(const std::vector<std::array<double, 
   return rms;
 }
 
+// Each joint's largest gravity torque (N m, absolute) over joint vectors drawn within the limits:
+// what a twist per N m means at the worst pose of the arm's range.
+std::array<double, kJointCount> largestTorquesNm(const Model& start) {
+  const RigidGravityTorque torque_nm(start);
+  std::mt19937_64 rng(1);
+  std::array<double, kJointCount> largest{};
+  JointsDeg q;
+  for (int n = 0; n < 2000; ++n) {
+    for (int j = 0; j < kJointCount; ++j)
+      q[j] = std::uniform_real_distribution<double>(start.joints[j].min_deg,
+                                                    start.joints[j].max_deg)(rng);
+    const auto t = torque_nm(q);
+    for (int j = 0; j < kJointCount; ++j) largest[j] = std::max(largest[j], std::abs(t[j]));
+  }
+  return largest;
+}
+
 }  // namespace
+
+std::array<double, kJointCount> priorTwistSigmaDegPerNm(const Model& start) {
+  std::array<double, kJointCount> sigma{};
+  if (!start.compliance) return sigma;
+  const auto largest = largestTorquesNm(start);
+  for (int j = 0; j < kJointCount; ++j)
+    sigma[j] = largest[j] > 1e-9 ? kPriorLargestTwistDeg / largest[j] : 0;
+  return sigma;
+}
 
 std::string ComplianceEstimate::summary() const {
   if (joints.empty()) return "no joint carries the arm's weight at these poses: none identified";
@@ -48,9 +75,9 @@ std::string ComplianceEstimate::summary() const {
   if (identified) return out;
   std::snprintf(
       buf, sizeof buf,
-      "; not told from noise (chi-square %.1f, needs %.1f): the model stays rigid. A plan "
-      "designed for it (robocal plan --compliance) on chucks placed apart would show it "
-      "(docs/accuracy.md, \"Chucks placed apart\")",
+      "; not told from noise (chi-square %.1f, needs %.1f): the model stays rigid, and its "
+      "predictions count the twist it may have. Chucks placed about 600 mm apart (the "
+      "reference cell's) would show it (docs/accuracy.md, \"The whole range by default\")",
       chi2, chi2_threshold);
   return out + buf;
 }
@@ -124,13 +151,29 @@ SolveResult solveWithCompliance(const Model& start, const std::vector<Sample>& s
     out.identified =
         out.chi2 > out.chi2_threshold &&
         std::all_of(twist.begin(), twist.end(), [](double c) { return std::abs(c) <= 0.1; });
+    // What the predictions count: a twist told from noise, the data's uncertainty; one not told,
+    // that bounded by what a twist can be (priorTwistSigmaDegPerNm, as a Gaussian prior): where
+    // the data barely tell it (one shell, the paper's compact fixture), about the prior's size
+    // instead of a sigma far past any real arm's.
+    Eigen::MatrixXd counted = cov;
+    if (!out.identified) {
+      const auto prior = priorTwistSigmaDegPerNm(start);
+      Eigen::MatrixXd information = cov.ldlt().solve(Eigen::MatrixXd::Identity(k, k));
+      for (Eigen::Index c = 0; c < k; ++c) {
+        const double p = prior[out.joints[c]];
+        if (p > 0) information(c, c) += 1 / (p * p);
+      }
+      counted = information.ldlt().solve(Eigen::MatrixXd::Identity(k, k));
+      for (Eigen::Index c = 0; c < k; ++c)
+        out.sigma_deg_per_nm[out.joints[c]] = std::sqrt(std::max(0.0, counted(c, c)));
+    }
     // The joint covariance (the header): the 54's own at the twist the model takes (the fitted
     // one when kept, the start's when not), and the twist's carried into them by what it moves
     // them. Kept or not, the twist is known only to its uncertainty.
     const int n = kParamCount;
     out.covariance =
         Eigen::MatrixXd::Zero(twistCovarianceIndex(kJointCount), twistCovarianceIndex(kJointCount));
-    const Eigen::MatrixXd moved = absorbed * cov;  // Cov(params, twist)
+    const Eigen::MatrixXd moved = absorbed * counted;  // Cov(params, twist)
     out.covariance.topLeftCorner(n, n) =
         (out.identified ? fit : at_start).covariance + moved * absorbed.transpose();
     for (Eigen::Index a = 0; a < k; ++a) {
@@ -138,8 +181,17 @@ SolveResult solveWithCompliance(const Model& start, const std::vector<Sample>& s
       out.covariance.block(0, ja, n, 1) = moved.col(a);
       out.covariance.block(ja, 0, 1, n) = moved.col(a).transpose();
       for (Eigen::Index b = 0; b < k; ++b)
-        out.covariance(ja, twistCovarianceIndex(out.joints[b])) = cov(a, b);
+        out.covariance(ja, twistCovarianceIndex(out.joints[b])) = counted(a, b);
     }
+    // A joint whose twist was not looked for (its torque too small at these poses: the wrist's)
+    // may twist where the arm's whole range loads it: as compliant per N m as the most compliant
+    // joint measured (its twist, or its uncertainty), independent of the rest.
+    double measured = 0;
+    for (Eigen::Index c = 0; c < k; ++c)
+      measured = std::max({measured, std::abs(twist[out.joints[c]]), std::sqrt(counted(c, c))});
+    for (int j = 0; j < kJointCount; ++j)
+      if (std::find(out.joints.begin(), out.joints.end(), j) == out.joints.end())
+        out.covariance(twistCovarianceIndex(j), twistCovarianceIndex(j)) = measured * measured;
     // The largest twist over the samples and its sigma (the twist's gradient in c is the torque).
     for (const auto& t : tau) {
       double twist_deg = 0;

@@ -51,6 +51,6 @@ struct TempDir {
   std::string operator/(const std::string& name) const { return (path / name).string(); }
 };
 
-inline const std::string kModel = ROBOCAL_SOURCE_DIR "/config/puma560.json";
+inline const std::string kModel = ROBOCAL_SOURCE_DIR "/config/puma560-paper.json";
 
 }  // namespace robocal::test

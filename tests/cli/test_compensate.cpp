@@ -3,6 +3,8 @@
 
 #include "cli_helpers.hpp"
 
+#include <robocal/formats/samples_csv.hpp>
+
 #include <robocal/formats/csv.hpp>
 #include <robocal/formats/program.hpp>
 
@@ -167,8 +169,12 @@ TEST_CASE("[cli] robocal compensate and accuracy on a simulated calibration") {
     CHECK_FALSE(std::ifstream(dir / "never.csv").good());
   }
   SECTION("a calibration that approached its points from below reaches the targets so too") {
-    REQUIRE(runRobocal("solve --model " + kModel + " " + dir / "s.csv" + " --approach-deg 0.02" +
-                       " --out " + dir / "up.json")
+    // Samples from before the approach was recorded with them: the option says it.
+    std::vector<robocal::Sample> unrecorded = robocal::loadSamplesFile(dir / "s.csv");
+    for (robocal::Sample& s : unrecorded) s.approach_deg.reset();
+    robocal::saveSamplesFile(dir / "s-unrecorded.csv", unrecorded);
+    REQUIRE(runRobocal("solve --model " + kModel + " " + dir / "s-unrecorded.csv" +
+                       " --approach-deg 0.02" + " --out " + dir / "up.json")
                 .exit_code == 0);
     CHECK(nlohmann::json::parse(readFile(dir / "up.json"))["provenance"]["approach_deg"] == 0.02);
     writeFile(dir / "poses.csv",
@@ -188,8 +194,8 @@ TEST_CASE("[cli] robocal compensate and accuracy on a simulated calibration") {
                    " --truth " + dir / "truth.json" + " --json");
     const auto j = nlohmann::json::parse(r.output);
     CHECK(j["per_pose"][0]["approach"] == nlohmann::json::array({1, 1, 1, 1, 1, 1}));
-    CHECK(runRobocal("solve --model " + kModel + " " + dir / "s.csv" + " --approach-deg 2" +
-                     " --out " + dir / "never.json")
+    CHECK(runRobocal("solve --model " + kModel + " " + dir / "s-unrecorded.csv" +
+                     " --approach-deg 2" + " --out " + dir / "never.json")
               .exit_code == 2);
   }
 }
@@ -266,8 +272,9 @@ TEST_CASE("[cli] a true robot that is not its model: simulate --realism, judged 
         nlohmann::json::parse(acc.output)["compensated_commanded_position_error_mm"]["rms"];
   }
   INFO("compensated RMS: ideal " << compensated_rms[0] << " mm, typical " << compensated_rms[1]);
-  // Backlash, compliance, warm-up and the LVDT's errors are error the model cannot remove.
-  CHECK(compensated_rms[1] > 1.3 * compensated_rms[0]);
+  // Backlash, compliance, warm-up and the LVDT's errors are error the model cannot remove (a
+  // calibration with no approach, judged from either side as its targets are reached: 1.2x).
+  CHECK(compensated_rms[1] > 1.15 * compensated_rms[0]);
 }
 
 TEST_CASE(
@@ -308,7 +315,7 @@ TEST_CASE(
     RunResult r = runRobocal("compensate --model " + kModel + " --targets " + dir / "program.csv" +
                              " --out " + dir / "rigid.csv --payload-kg 5");
     CHECK(r.exit_code == 2);
-    CHECK_THAT(r.output, Contains("puma560.json carries no compliance"));
+    CHECK_THAT(r.output, Contains("puma560-paper.json carries no compliance"));
     r = runRobocal("compensate --model " + dir / "compliant.json" + " --nominal " + kModel +
                    " --targets " + dir / "program.csv" + " --out " + dir / "bad.csv" +
                    " --payload-com 0,60");

@@ -15,7 +15,7 @@ TEST_CASE("a UR5 from its URDF: plan, simulate, solve and compensate offline", "
   TempDir dir;
   const std::string src = ROBOCAL_SOURCE_DIR;
   REQUIRE(runRobocal("import --urdf " + src + "/config/ur5.urdf --fixtures " + src +
-                     "/config/puma560.json --out " + (dir / "ur5.json"))
+                     "/config/puma560-paper.json --out " + (dir / "ur5.json"))
               .exit_code == 0);
   // The URDF's world_joint hangs the arm 800 mm above the chucks: stand it on the table 450 mm
   // behind them, its shoulder level with the chuck fixture.

@@ -332,3 +332,47 @@ TEST_CASE("robocal solve --truth judges against the true robot, backlash and com
   CHECK(true_robot_mm < 0.12);
   CHECK(geometry_mm > 2 * true_robot_mm);
 }
+
+TEST_CASE("robocal solve takes the approach the samples record, and says when they record none") {
+  TempDir dir;
+  simulate(dir);  // the simulator's own grid: straight from point to point, recorded as 0
+  std::vector<Sample> samples = loadSamplesFile(dir / "s.csv");
+  REQUIRE(samples[0].approach_deg);
+  CHECK(*samples[0].approach_deg == 0);
+  for (Sample& s : samples) s.approach_deg = 0.02;  // as robocald and simulate --plan write them
+  saveSamplesFile(dir / "up.csv", samples);
+  for (Sample& s : samples) s.approach_deg.reset();  // a file from before the record
+  saveSamplesFile(dir / "unrecorded.csv", samples);
+
+  // Recorded: the model takes it with no option, and compensate reaches targets the same way.
+  auto r = runRobocal("solve --model " + kModel + " " + (dir / "up.csv") + " --out " +
+                      (dir / "up.json"));
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  CHECK(r.output.find("do not record how") == std::string::npos);
+  REQUIRE(loadModelFile(dir / "up.json").provenance);
+  CHECK(loadModelFile(dir / "up.json").provenance->approach_deg == Approx(0.02));
+  std::ofstream(dir / "poses.csv")
+      << "name,x_mm,y_mm,z_mm,rz_deg,ry_deg,rx_deg\nhome,0,0,250,0,135,0\n";
+  r = runRobocal("compensate --model " + (dir / "up.json") + " --targets " + (dir / "poses.csv") +
+                 " --out " + (dir / "up-targets.csv"));
+  REQUIRE(r.exit_code == 0);
+  std::stringstream written;
+  written << std::ifstream(dir / "up-targets.csv").rdbuf();
+  CHECK_THAT(written.str(), Contains(",1,1,1,1,1,1,"));  // each joint up from its pre-point
+
+  // An option that contradicts the record is refused, nothing written.
+  r = runRobocal("solve --model " + kModel + " " + (dir / "up.csv") + " --approach-deg 0 --out " +
+                 (dir / "never.json"));
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.output, Contains("the samples record 0.0200 deg"));
+  CHECK_FALSE(std::filesystem::exists(dir / "never.json"));
+
+  // Not recorded: the fit goes on assuming none, and says so and what to do.
+  r = runRobocal("solve --model " + kModel + " " + (dir / "unrecorded.csv") + " --out " +
+                 (dir / "plain.json"));
+  REQUIRE(r.exit_code == 0);
+  CHECK_THAT(r.output, Contains("samples do not record how their points were approached"));
+  CHECK_THAT(r.output, Contains("--approach-deg D"));
+  CHECK(loadModelFile(dir / "plain.json").provenance->approach_deg == 0);
+}

@@ -486,8 +486,11 @@ TEST_CASE("an identified twist's covariance survives its file and widens the pre
     const Eigen::Vector3d per_twist = (Kinematics(plus).ballPosition(q, Eigen::Vector3d::Zero()) -
                                        Kinematics(minus).ballPosition(q, Eigen::Vector3d::Zero())) /
                                       2e-5;
-    const double without = Compensator(nominal, twisted_only).predictedPositionError(q);
-    const double with = Compensator(nominal, back).predictedPositionError(q);
+    // The covariance as filed, without the priors of what the fit left unidentified.
+    CompensationOptions as_filed;
+    as_filed.priors = UnidentifiedPriors::none();
+    const double without = Compensator(nominal, twisted_only, as_filed).predictedPositionError(q);
+    const double with = Compensator(nominal, back, as_filed).predictedPositionError(q);
     INFO(q.transpose() << ": " << without << " -> " << with << " mm");
     CHECK(with == Approx(std::hypot(without, kTwistSigma * per_twist.norm())).epsilon(1e-4));
     CHECK(Compensator(nominal, back).predictedOrientationError(q) >

@@ -24,7 +24,7 @@ json daemonConfig(const CellSimProcess& cell, const std::string& dir, int max_cl
   std::ofstream(dir + "/cell.json") << smallCell({"B1C1", "B2C2", "B3C3"}, {0}).dump(1);
   json drivers = drivers::toJson(cell.driversConfig());
   drivers["bar"]["mode"] = "streamed";
-  return {{"model", ROBOCAL_SOURCE_DIR "/config/puma560.json"},
+  return {{"model", ROBOCAL_SOURCE_DIR "/config/puma560-paper.json"},
           {"cell", dir + "/cell.json"},
           {"max_clients", max_clients},
           {"max_line_bytes", 1024},

@@ -502,12 +502,17 @@ TEST_CASE(
       if (st.kind == StepKind::kPoint)
         ++planned[{sh.shell, std::lround(st.lat_deg * 1000), std::lround(st.lon_deg * 1000)}];
   const std::vector<Sample> samples = loadSamplesFile(cell.runDir(run_id) + "/samples.csv");
+  const double approach_deg =
+      loadPlanFile(cell.runDir(run_id) + "/plan.json").cell.motion.approach_deg;
   double last_time_s = 1.7e9;  // 2023: any clock in this test is later
   for (const Sample& s : samples) {
     ++measured[{s.shell, std::lround(s.lat_deg * 1000), std::lround(s.lon_deg * 1000)}];
     REQUIRE(s.time_s);
     CHECK(*s.time_s >= last_time_s);
     last_time_s = *s.time_s;
+    // How it was reached, the plan's approach, recorded across the kill too.
+    REQUIRE(s.approach_deg);
+    CHECK(*s.approach_deg == Approx(approach_deg).margin(1e-4));
   }
   int twice = 0, more = 0;
   for (const auto& [place, n] : planned) {

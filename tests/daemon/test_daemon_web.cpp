@@ -38,13 +38,13 @@ struct WebFixture {
     std::ofstream(cell.dir() + "/cell.json") << smallCell({"B1C1", "B2C2", "B3C3"}, {0}).dump(1);
     json drivers = drivers::toJson(cell.driversConfig());
     drivers["bar"]["mode"] = "streamed";
-    daemon =
-        std::make_unique<DaemonProcess>(json{{"model", ROBOCAL_SOURCE_DIR "/config/puma560.json"},
-                                             {"cell", cell.dir() + "/cell.json"},
-                                             {"web_port", 0},
-                                             {"max_browsers", 2},
-                                             {"request_timeout_s", 1.0},
-                                             {"drivers", drivers}});
+    daemon = std::make_unique<DaemonProcess>(
+        json{{"model", ROBOCAL_SOURCE_DIR "/config/puma560-paper.json"},
+             {"cell", cell.dir() + "/cell.json"},
+             {"web_port", 0},
+             {"max_browsers", 2},
+             {"request_timeout_s", 1.0},
+             {"drivers", drivers}});
     daemon->start();
     REQUIRE(daemon->webPort() != 0);
   }

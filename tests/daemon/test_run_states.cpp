@@ -33,7 +33,7 @@ class Harness {
   Harness(const std::vector<std::string>& connections, const std::vector<double>& extensions_mm,
           double truth_error_mm = 0, std::function<void(daemon::DaemonConfig&)> configure = {})
       : configure_(std::move(configure)),
-        nominal_(loadModelFile(ROBOCAL_SOURCE_DIR "/config/puma560.json")),
+        nominal_(loadModelFile(ROBOCAL_SOURCE_DIR "/config/puma560-paper.json")),
         cell_(cellFromJson(smallCell(connections, extensions_mm, 90))),
         plan_(planCell(nominal_, cell_)) {
     ParamVector p = toParams(nominal_);

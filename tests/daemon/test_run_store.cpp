@@ -78,6 +78,14 @@ TEST_CASE(
   REQUIRE(back.size() == 2);
   REQUIRE(back[1].time_s);
   CHECK(*back[1].time_s == Approx(1764921600.5).margin(1e-3));
+  // How the point was reached travels with it (robocal solve reads it back).
+  s.approach_deg = 0.02;
+  fresh.appendSample(s, 0.004);
+  back = fresh.loadSamples();
+  REQUIRE(back.size() == 3);
+  CHECK_FALSE(back[0].approach_deg);  // not said: an empty field
+  REQUIRE(back[2].approach_deg);
+  CHECK(*back[2].approach_deg == Approx(0.02));
 
   // A folder an older robocald wrote (no time_s in its header), resumed by this one: the new rows
   // have the header's fields, so the file still loads, without times.
@@ -90,5 +98,6 @@ TEST_CASE(
   back = reopened.loadSamples();
   REQUIRE(back.size() == 2);
   CHECK_FALSE(back[1].time_s);
+  CHECK_FALSE(back[1].approach_deg);
   CHECK(back[1].length_mm == Approx(150.1));
 }

@@ -45,7 +45,7 @@ TEST_CASE("Bar: polled readings follow the true bar length", "[drivers][bar]") {
   val.connect();
   const Joints6 target{0.3, 45.2, -90.1, 0, 45, 0};
   val.moveJoints(target);
-  const auto model = robocal::loadModelFile(ROBOCAL_SOURCE_DIR "/config/puma560.json");
+  const auto model = robocal::loadModelFile(ROBOCAL_SOURCE_DIR "/config/puma560-paper.json");
   const double expected = trueLength(model, target, 1, 2) - trueLength(model, kStart, 1, 2);
   REQUIRE(std::abs(expected) > 0.05);
   REQUIRE(std::abs(expected) < 1.5);
@@ -218,7 +218,7 @@ TEST_CASE(
     val.connect();
     val.moveJoints({0, 45.05, -90, 0, 45, 0});
     val.moveJoints(kStart);  // back to the same readings, joint 2 now moving down
-    const auto model = robocal::loadModelFile(ROBOCAL_SOURCE_DIR "/config/puma560.json");
+    const auto model = robocal::loadModelFile(ROBOCAL_SOURCE_DIR "/config/puma560-paper.json");
     const double backlash_mm = trueLength(model, {0, 44.98, -90, 0, 45, 0}, 1, 2) -
                                trueLength(model, {0, 45.02, -90, 0, 45, 0}, 1, 2);
     REQUIRE(std::abs(backlash_mm) > 0.1);

@@ -9,7 +9,7 @@
 TEST_CASE("Cellsim: control commands on stdin, replies on stdout", "[drivers][cellsim]") {
   const std::string cmd = "printf 'status\\nconnect B9C1\\nevents\\nquit\\n' | " ROBOCAL_BINARY_DIR
                           "/sim/cellsim/robocal-cellsim --model " ROBOCAL_SOURCE_DIR
-                          "/config/puma560.json --stdin-control 2>&1";
+                          "/config/puma560-paper.json --stdin-control 2>&1";
   FILE* p = ::popen(cmd.c_str(), "r");
   REQUIRE(p);
   std::string out;

@@ -52,7 +52,7 @@ CellSimProcess::CellSimProcess(const std::vector<std::string>& args, const std::
   if (!::mkdtemp(tmpl)) throw std::runtime_error("mkdtemp failed");
   dir_ = tmpl;
   std::vector<std::string> argv = {
-      cellsimBinary(), "--model",   ROBOCAL_SOURCE_DIR "/config/puma560.json",
+      cellsimBinary(), "--model",   ROBOCAL_SOURCE_DIR "/config/puma560-paper.json",
       "--val-link",    valPath(),   "--bar-link",
       barPath(),       "--control", dir_ + "/control"};
   if (!config_json.empty()) {

@@ -153,7 +153,7 @@ TEST_CASE("Probe: the bring-up move test in each dialect preset, switched in the
 
       const auto [code, out] = runRobocal("probe --config " + config +
                                           " --move-test 2 --i-have-cleared-the-cell --model " +
-                                          ROBOCAL_SOURCE_DIR "/config/puma560.json");
+                                          ROBOCAL_SOURCE_DIR "/config/puma560-paper.json");
       INFO(out);
       CHECK(code == 0);
       for (int j = 1; j <= 6; ++j)

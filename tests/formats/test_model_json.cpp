@@ -28,6 +28,14 @@ TEST_CASE("config/puma560.json is the PUMA 560 derived from its DH table") {
   for (int b = 0; b < kBallCount; ++b) CHECK(file.balls_mm[b] == puma560NominalModel().balls_mm[b]);
   CHECK(file.joints[1].min_deg == -45);
   CHECK(file.joints[5].max_deg == 266);
+  // The reference cell's chucks are placed about 600 mm apart (docs/accuracy.md, "Chucks placed
+  // apart"); the paper's compact fixture, 150 mm, is config/puma560-paper.json, the built-in's.
+  CHECK((file.chucks_mm[0] - file.chucks_mm[1]).norm() == Approx(600).epsilon(0.001));
+  CHECK((file.chucks_mm[1] - file.chucks_mm[2]).norm() == Approx(600).epsilon(0.001));
+  const Model paper = loadModelFile(ROBOCAL_SOURCE_DIR "/config/puma560-paper.json");
+  CHECK(toParams(paper).isApprox(toParams(file), 1e-12));
+  for (int c = 0; c < kChuckCount; ++c)
+    CHECK(paper.chucks_mm[c] == puma560NominalModel().chucks_mm[c]);
 }
 
 TEST_CASE("a model survives the round trip through its file format exactly") {

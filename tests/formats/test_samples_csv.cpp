@@ -88,3 +88,42 @@ TEST_CASE("the time of measurement is an optional column: kept when known, empty
   CHECK_THROWS_WITH(parseSamples(header + "1,1,1,0,10,0,1,2,3,4,5,6,100,1e13\n", "s.csv"),
                     Contains("s.csv:2: column 'time_s': expected seconds within +/-1e12"));
 }
+
+TEST_CASE("how each point was approached is an optional column the fit reads back") {
+  Sample approached = sample(1, 0, 0, 250.0);
+  approached.approach_deg = 0.02;
+  Sample plain = sample(1, 1, 1, 251.0);
+  plain.approach_deg = 0.0;
+  const std::string text = formatSamples({approached, plain});
+  CHECK_THAT(text, Contains(std::string(kSamplesHeader) + ",approach_deg\n"));
+  const auto out = parseSamples(text, "s.csv");
+  REQUIRE(out.size() == 2);
+  REQUIRE(out[0].approach_deg);
+  CHECK(*out[0].approach_deg == Approx(0.02).margin(1e-9));
+  REQUIRE(out[1].approach_deg);
+  CHECK(*out[1].approach_deg == 0);
+  // A fit assumes the smallest recorded approach: a point reached with less took up less backlash.
+  std::size_t unrecorded = 99;
+  REQUIRE(recordedApproachDeg(out, &unrecorded));
+  CHECK(*recordedApproachDeg(out) == 0);
+  CHECK(unrecorded == 0);
+  const std::vector<Sample> both = {out[0], out[0]};
+  CHECK(*recordedApproachDeg(both) == Approx(0.02));
+
+  // A file written before the record: nothing to go on, and the count says how many.
+  const std::vector<Sample> mixed = {out[0], sample(2, 0, 0, 250)};
+  CHECK_FALSE(recordedApproachDeg(mixed, &unrecorded));
+  CHECK(unrecorded == 1);
+  CHECK(formatSamples({sample(1, 0, 0, 250)}).find("approach_deg") == std::string::npos);
+
+  // Time and approach together, in that order; each one's bad value named with its line.
+  approached.time_s = 12.5;
+  CHECK_THAT(formatSamples({approached}),
+             Contains(std::string(kSamplesHeader) + ",time_s,approach_deg\n"));
+  const std::string header = std::string(kSamplesHeader) + ",approach_deg\n";
+  CHECK_THROWS_WITH(parseSamples(header + "1,1,1,0,10,0,1,2,3,4,5,6,100,-0.02\n", "s.csv"),
+                    Contains("s.csv:2: column 'approach_deg': expected degrees from 0 to 10"));
+  CHECK_THROWS_WITH(parseSamples(header + "1,1,1,0,10,0,1,2,3,4,5,6,100,up\n", "s.csv"),
+                    Contains("s.csv:2: column 'approach_deg'"));
+  CHECK_FALSE(parseSamples(header + "1,1,1,0,10,0,1,2,3,4,5,6,100,\n")[0].approach_deg);
+}

@@ -11,7 +11,7 @@ namespace robocal::test {
 inline const std::string kSource = ROBOCAL_SOURCE_DIR;
 
 inline const Model& nominal() {
-  static const Model m = loadModelFile(kSource + "/config/puma560.json");
+  static const Model m = loadModelFile(kSource + "/config/puma560-paper.json");
   return m;
 }
 

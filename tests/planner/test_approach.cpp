@@ -79,7 +79,7 @@ TEST_CASE("approach pre-point: every joint a step back, one joint at most a degr
   // Over random poses and connections, also where the bar's length hardly depends on any joint
   // and Newton's step to keep the ball on the shell would run off (the shipped plan once had a
   // pre-point 47,864 deg back in joint 2).
-  const Model puma = loadModelFile(ROBOCAL_SOURCE_DIR "/config/puma560.json");
+  const Model puma = loadModelFile(ROBOCAL_SOURCE_DIR "/config/puma560-paper.json");
   const Kinematics kin(puma);
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> angle(-180, 180);

@@ -286,7 +286,7 @@ TEST_CASE("robocal plan --check writes the check plan and check-plan accepts it"
   const std::string path = tempPath("check.json");
   std::string out;
   const std::string args =
-      " --model " + kSource + "/config/puma560.json --cell " + kSource + "/config/cell.json ";
+      " --model " + kSource + "/config/puma560-paper.json --cell " + kSource + "/config/cell.json ";
   const int status =
       runCommand(robocalBinary() + " plan --check --quiet" + args + "--out " + path, out);
   INFO(out);

@@ -235,7 +235,7 @@ TEST_CASE("robocal check-plan prints each violation with its step and exits non-
       j["shells"][4]["steps"][7]["joints_deg"][2].get<double>() + 3.0;
   std::ofstream(bad) << j.dump();
   const std::string base = robocalBinary() + " check-plan --model " + kSource +
-                           "/config/puma560.json --cell " + kSource + "/config/cell.json ";
+                           "/config/puma560-paper.json --cell " + kSource + "/config/cell.json ";
   std::string out;
   CHECK(runCommand(base + good, out) == 0);
   CHECK(out.find("OK") != std::string::npos);
@@ -570,10 +570,10 @@ TEST_CASE("robocal simulate --plan samples at the plan's data points", "[cli]") 
   const TempFiles cleanup{{plan_path, csv_path}};
   savePlanFile(plan_path, plan);
   std::string out;
-  const int status =
-      runCommand(robocalBinary() + " simulate --model " + kSource + "/config/puma560.json --plan " +
-                     plan_path + " --out " + csv_path + " --noise-mm 0",
-                 out);
+  const int status = runCommand(robocalBinary() + " simulate --model " + kSource +
+                                    "/config/puma560-paper.json --plan " + plan_path + " --out " +
+                                    csv_path + " --noise-mm 0",
+                                out);
   INFO(out);
   REQUIRE(status == 0);
   const std::vector<Sample> samples = loadSamplesFile(csv_path);
@@ -587,10 +587,13 @@ TEST_CASE("robocal simulate --plan samples at the plan's data points", "[cli]") 
     CHECK((samples[i].joints_deg - expected[i].joints_deg).cwiseAbs().maxCoeff() < 1e-5);
     // The perturbed robot: near the shell, not on it.
     CHECK(std::abs(samples[i].length_mm - 150.0) < 10.0);
+    // Each sample says how its point was reached: the plan's approach.
+    REQUIRE(samples[i].approach_deg);
+    CHECK(*samples[i].approach_deg == Approx(plan.cell.motion.approach_deg).margin(1e-4));
   }
   // Options that would contradict the plan are refused.
   CHECK(runCommand(robocalBinary() + " simulate --model " + kSource +
-                       "/config/puma560.json --plan " + plan_path + " --bar-mm 100",
+                       "/config/puma560-paper.json --plan " + plan_path + " --bar-mm 100",
                    out) != 0);
 }
 

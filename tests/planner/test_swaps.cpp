@@ -30,7 +30,7 @@ Plan shellsOf(const std::vector<Connection>& connections, const std::vector<doub
 
 TEST_CASE("the operator's steps count walks to another chuck and their distance",
           "[planner][swaps]") {
-  const Model model = loadModelFile(ROBOCAL_SOURCE_DIR "/config/puma560.json");
+  const Model model = loadModelFile(ROBOCAL_SOURCE_DIR "/config/puma560-paper.json");
   // B1C1 -> B2C1 (ball) -> B2C3 (walk) -> B2C3 longer bar (extension) -> B1C2 (walk and ball).
   Plan plan = shellsOf(parseConnections("B1C1,B2C1,B2C3"), {0.0});
   plan.shells.push_back(plan.shells.back());
@@ -55,7 +55,7 @@ TEST_CASE("the operator's steps count walks to another chuck and their distance"
 TEST_CASE("the shipped cells order their connections for two walks an extension",
           "[planner][swaps]") {
   for (const auto& [cell_file, model_file] :
-       {std::pair{"/config/cell.json", "/config/puma560.json"},
+       {std::pair{"/config/cell.json", "/config/puma560-paper.json"},
         std::pair{"/config/cell-rx160.json", "/config/rx160.json"}}) {
     INFO(cell_file);
     const CellConfig cell = loadCellFile(std::string(ROBOCAL_SOURCE_DIR) + cell_file);

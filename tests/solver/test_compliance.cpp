@@ -3,6 +3,8 @@
 // whole range judged better for it.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+
 #include "fit_fixtures.hpp"
 
 #include <robocal/kinematics/kinematics.hpp>
@@ -65,11 +67,13 @@ TEST_CASE("compliance: the twist of the loaded joints is identified, and only wh
   const double noise_mm = 0.02;
   AssessOptions with;
   with.identify_compliance = true;
+  AssessOptions rigid_fit;  // the 54 alone (robocal solve --rigid)
+  rigid_fit.identify_compliance = false;
 
   SECTION("a true robot that twists: joints 2 and 3 found, the whole range better for it") {
     const TrueRobot truth{geometry, twisting};
     const std::vector<Sample> samples = measured(truth, noise_mm, 40);
-    const FitAssessment rigid = assessFit(nominal, samples);
+    const FitAssessment rigid = assessFit(nominal, samples, rigid_fit);
     const FitAssessment compliant = assessFit(nominal, samples, with);
     REQUIRE(compliant.compliance);
     const ComplianceEstimate& c = *compliant.compliance;
@@ -112,7 +116,7 @@ TEST_CASE("compliance: the twist of the loaded joints is identified, and only wh
       CHECK(std::sqrt(c.covariance(t, t)) == Approx(c.sigma_deg_per_nm[j]));
     }
     CHECK(calibratedCovariance(compliant).rows() == twistCovarianceIndex(kJointCount));
-    const FitAssessment rigid = assessFit(nominal, compliant.samples);
+    const FitAssessment rigid = assessFit(nominal, compliant.samples, rigid_fit);
     CHECK(compliant.fit.params == rigid.fit.params);
     // Taken as known, the twist gives back the rigid fit's covariance (the health check's).
     const Eigen::MatrixXd known = covarianceAtKnownTwist(c.covariance);
@@ -195,9 +199,23 @@ TEST_CASE("compliance: the identified twist's covariance joins the 54's as the b
                              << std::sqrt(joint(kParamCount + 1, kParamCount + 1)) << ", "
                              << std::sqrt(batch(p, p)));
   CHECK(worst < 0.01);
+  // The joints not fitted (the wrist's torque is small at these poses) are counted at the size of
+  // the most compliant fitted one, independent of the rest: the batch has no such rows.
+  Eigen::MatrixXd fitted_only = joint;
+  for (int j = 0; j < kJointCount; ++j) {
+    const int t = kParamCount + j;
+    if (std::find(twisted.begin(), twisted.end(), j) != twisted.end()) continue;
+    CHECK(std::sqrt(joint(t, t)) ==
+          Approx(std::max({std::abs(at.compliance->deg_per_nm[1]),
+                           std::abs(at.compliance->deg_per_nm[2]),
+                           std::sqrt(joint(kParamCount + 1, kParamCount + 1)),
+                           std::sqrt(joint(kParamCount + 2, kParamCount + 2))})));
+    CHECK(joint.row(t).cwiseAbs().sum() == Approx(joint(t, t)));
+    fitted_only(t, t) = 0;
+  }
   // The predicted ball errors carry it: the batch covariance carried to the ball by the position
   // Jacobian, the twist's columns again by differences of the model.
-  const std::vector<double> predicted = predictedBallErrors(at, joint, samples);
+  const std::vector<double> predicted = predictedBallErrors(at, fitted_only, samples);
   const Kinematics kin(at);
   for (size_t i = 0; i < samples.size(); i += 97) {
     const Sample& s = samples[i];
@@ -216,8 +234,11 @@ TEST_CASE("compliance: the identified twist's covariance joins the 54's as the b
     }
     CHECK(predicted[i] == Approx(std::sqrt((gb * batch * gb.transpose()).trace())).epsilon(0.01));
   }
-  // The fit's own predicted ball error is of that covariance.
-  double sum = 0;
-  for (double e : predicted) sum += e * e;
+  // The fit's own predicted ball error is of the whole covariance, the unfitted joints' twist
+  // included: a little larger.
+  double sum = 0, fitted_sum = 0;
+  for (double e : predictedBallErrors(at, joint, samples)) sum += e * e;
+  for (double e : predicted) fitted_sum += e * e;
   CHECK(fit.predicted_ball_error_rms_mm == Approx(std::sqrt(sum / predicted.size())));
+  CHECK(sum > fitted_sum);
 }

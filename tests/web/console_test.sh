@@ -36,7 +36,7 @@ cleanup() {
 }
 trap cleanup EXIT
 bin=$build/cli/robocal
-model=$root/config/puma560.json
+model=$root/config/puma560-paper.json
 cell=$root/config/cell.json
 "$bin" simulate --model "$model" --seed 7 --connections B1C1 --points-per-shell 1 \
   --out "$out/unused.csv" --truth-out "$out/truth.json" >/dev/null || exit 1

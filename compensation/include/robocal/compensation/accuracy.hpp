@@ -60,8 +60,10 @@ struct AccuracyReport {
 
 // Compensates every target pose and gathers the statistics over those solved. `truth`, when
 // given, is the true robot of a simulation: with realism (sim/true_robot.hpp), the arm is judged
-// as it works: warm (the warm-up over), every joint approaching its target in the positive
-// direction, carrying the truth's payload. `configs`, when not empty, holds one entry a target:
+// as it works: warm (the warm-up over), carrying the truth's payload, and each target reached as
+// the output commands it: up in every joint when the compensated target has its approach
+// pre-point (the model records an approach), else from either side (a fixed pattern per target),
+// as the nominal joints are. `configs`, when not empty, holds one entry a target:
 // the arm configuration it must be reached in (nullopt: the best one), as a targets file's config
 // column.
 AccuracyReport assessAccuracy(const Compensator& compensator,

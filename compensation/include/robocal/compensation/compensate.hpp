@@ -48,6 +48,17 @@ enum class CompensationStatus {
 // files' and protocol's words.
 const char* compensationStatusName(CompensationStatus status);
 
+// What a calibration may leave unidentified, at its prior size, so that a predicted error counts
+// it instead of dropping it (docs/accuracy.md, "Honest extrapolation"; the twists' priors are in
+// the fit's covariance, solver/compliance_fit.hpp).
+struct UnidentifiedPriors {
+  // A geared arm's full backlash a joint (deg): 0.005-0.02 in the literature (docs/realism.md).
+  // Counted when the calibration did not design it out (no approach recorded).
+  double backlash_deg = 0.01;
+  // None: the covariance as the fit left it (a test of its plumbing).
+  static UnidentifiedPriors none() { return {0}; }
+};
+
 struct CompensationOptions {
   Eigen::Isometry3d tool = Eigen::Isometry3d::Identity();  // TCP in the last link's frame
   // The calibrated solution must reach the target this closely, else the status says why not.
@@ -63,6 +74,8 @@ struct CompensationOptions {
   // reached its points (backlash then sits on the side the joint offsets hold); 0: no approach.
   // Unset: the calibrated model's (its provenance's approach_deg).
   std::optional<double> approach_deg;
+  // What the calibration left unidentified, counted in the predicted errors at this size.
+  UnidentifiedPriors priors;
 };
 
 struct CompensatedTarget {
@@ -127,14 +140,19 @@ class Compensator {
   Eigen::Isometry3d calibratedToolPose(const JointsDeg& readings_deg) const;
 
   // The calibrated model's 1-sigma tool position error (mm) and orientation error (deg) at these
-  // readings, from its covariance; NaN when it has none. The position error includes the error
-  // the fit found the model does not contain (ModelProvenance::unmodelled_mm), the orientation
-  // error does not (a bar measures no orientation).
+  // readings, from its covariance with what the fit left unidentified at its prior size
+  // (UnidentifiedPriors); NaN when it has none. The position error includes the error the
+  // fit found the model does not contain (ModelProvenance::unmodelled_mm), the orientation error
+  // does not (a bar measures no orientation).
   double predictedPositionError(const JointsDeg& readings_deg) const;
+  // The same without the backlash of targets reached from either side: what the calibration
+  // itself leaves uncertain (what its correction is judged against).
+  double predictedCalibrationError(const JointsDeg& readings_deg) const;
   double predictedOrientationError(const JointsDeg& readings_deg) const;
 
  private:
   CompensatedTarget solveCalibrated(CompensatedTarget t) const;
+  double predictedPositionError(const JointsDeg& readings_deg, bool with_backlash) const;
   // An ok target outside the calibration's measured joint ranges, or where its predicted error
   // exceeds its correction, gets the status that says so.
   void judgeCoverage(CompensatedTarget& t) const;
@@ -147,6 +165,8 @@ class Compensator {
   CompensationOptions options_;
   Eigen::Isometry3d tool_inverse_;
   double approach_deg_ = 0;
+  // Half a joint's prior backlash (rad) when no approach designs it out; 0 when one does.
+  double unapproached_half_backlash_rad_ = 0;
   // The covariance restricted to the estimated parameters, and their indices.
   std::vector<int> estimated_;
   Eigen::MatrixXd covariance_;

@@ -20,8 +20,9 @@ class RunDir {
   std::string id() const;
   std::string file(const std::string& name) const { return path_ + "/" + name; }
 
-  // Appends one row (the samples format plus bar_spread_mm and time_s) and fsyncs it. A run folder
-  // written before time_s was a column gets rows without it, as its header says.
+  // Appends one row (the samples format plus bar_spread_mm, time_s and approach_deg) and fsyncs
+  // it. A run folder written before time_s or approach_deg was a column gets rows without it, as
+  // its header says.
   void appendSample(const Sample& sample, double bar_spread_mm);
   // The samples on disk. A row torn by a crash (no line ending) is cut off first.
   std::vector<Sample> loadSamples();
@@ -34,7 +35,8 @@ class RunDir {
 
  private:
   std::string path_;
-  std::optional<bool> timed_;  // whether the samples file has a time_s column; read once
+  // Whether the samples file has the time_s and approach_deg columns; its header read once.
+  std::optional<bool> timed_, approach_recorded_;
 };
 
 // Whether the ball-bar may be attached to the robot, kept across runs and restarts in

@@ -22,6 +22,10 @@ struct Sample {
   // When it was measured, seconds on the run's clock (only differences count: the daemon writes
   // Unix time, `robocal simulate` the simulated robot time); absent when not known.
   std::optional<double> time_s;
+  // How the point was reached: each joint rose into it by this much (deg) from a pre-point, so
+  // backlash sat on one side (the plan's motion.approach_deg); 0 when it came as the path went.
+  // Absent when the file does not say (written before the record existed).
+  std::optional<double> approach_deg;
   std::string source;   // file it came from ("" when made in memory)
   int source_line = 0;  // 1-based line in that file (0 when made in memory)
 };

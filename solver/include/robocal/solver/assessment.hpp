@@ -41,8 +41,10 @@ struct AssessOptions {
   TrueBallMm truth;       // a simulation's true robot: where it puts each sample's ball; or none
   VerdictLimits verdict;  // what makes the fit unusable (verdict.hpp)
   // Identify the gravity compliance of the loaded joints with the 54 parameters, from the
-  // nominal's load (compliance_fit.hpp); the nominal must carry one.
-  bool identify_compliance = false;
+  // nominal's load (compliance_fit.hpp), when the nominal carries one: by default, since over the
+  // arm's whole range a rigid fit leaves the twist its offsets and gains absorbed near the shells
+  // (docs/accuracy.md). false: a rigid fit (robocal solve --rigid).
+  bool identify_compliance = true;
 };
 
 // One of the 54 parameters, in interface units: mm, deg, or a unitless gain (paramName and

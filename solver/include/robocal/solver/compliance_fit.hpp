@@ -22,6 +22,14 @@
 
 namespace robocal {
 
+// What a twist can be before any data (docs/realism.md's sources: 0.01-0.05 deg at the largest
+// gravity torque of a geared arm's shoulder and elbow): the predicted errors count a twist's
+// uncertainty at most about this size.
+inline constexpr double kPriorLargestTwistDeg = 0.03;
+// kPriorLargestTwistDeg per each joint's largest gravity torque within its limits (deg/(N m));
+// 0 for a joint that carries none. Zeros for a model without a load.
+std::array<double, kJointCount> priorTwistSigmaDegPerNm(const Model& start);
+
 struct ComplianceEstimate {
   // The start's load with the twist per N m the model takes: the fitted one when identified,
   // else the start's.
@@ -38,11 +46,12 @@ struct ComplianceEstimate {
   double chi2 = 0, chi2_threshold = 0;
   // The joint covariance of the 54 parameters and the six joints' twists, in Model::covariance's
   // layout (kParamCount + kJointCount square; ParamVector units, then deg/(N m)): the twist's
-  // covariance, what it moves the 54 by (the fit absorbs part of a twist), and the 54's own at
-  // the twist the model takes. Also when the twist is not kept: a twist the data cannot tell
-  // from noise may still be there up to its uncertainty, and the predicted errors count it (a
-  // rigid prediction of the arm's whole range is then 2-5x short of the truth:
-  // docs/accuracy.md). Empty when no joint carries the weight.
+  // covariance (the data's, bounded by the prior, priorTwistSigmaDegPerNm), what it moves the 54
+  // by (the fit absorbs part of a twist), and the 54's own at the twist the model takes; each
+  // joint not fitted, as compliant as the most compliant fitted one. Also when the twist is not
+  // kept: a twist the data cannot tell from noise may still be there up to its uncertainty, and the
+  // predicted errors count it (a rigid prediction of the arm's whole range is then 2-5x short of
+  // the truth: docs/accuracy.md). Empty when no joint carries the weight.
   Eigen::MatrixXd covariance;
   // The largest twist over the samples' poses (deg) and its 1-sigma: what the compliance means.
   double largest_twist_deg = 0;
