@@ -8,6 +8,7 @@
 #include <robocal/formats/program.hpp>
 
 #include <cstdio>
+#include <filesystem>
 
 namespace robocal::cli {
 namespace {
@@ -99,6 +100,13 @@ int compensateProgram(const Args& args, const Compensator& compensator,
   return not_ok || !program.undefined.empty() ? kExitSomeNotOk : 0;
 }
 
+// Whether two paths name one file (the second need not exist yet).
+bool sameFile(const std::string& a, const std::string& b) {
+  std::error_code ec;
+  if (std::filesystem::equivalent(a, b, ec)) return true;
+  return std::filesystem::weakly_canonical(a, ec) == std::filesystem::weakly_canonical(b, ec);
+}
+
 int run(const std::vector<std::string>& argv) {
   const Args args(argv,
                   {"model", "targets", "out", "nominal", "tool", "format", "approach-deg",
@@ -140,7 +148,13 @@ int run(const std::vector<std::string>& argv) {
                  "empty (models fitted by this robocal carry one)\n",
                  args.get("model", "").c_str());
 
+  if (sameFile(targets_path, out_path))
+    throw UsageError("--out " + out_path +
+                     " is the --targets file: write elsewhere (nothing was "
+                     "written)");
   const TargetFile file = loadTargetsFile(targets_path);
+  if (const auto units = targetsUnitsProblem(file))
+    throw UsageError(targets_path + ": " + *units + " (nothing was written)");
   const Compensator compensator(nominal, calibrated, options);
   std::vector<CompensatedTarget> results;
   size_t not_ok = 0;

@@ -178,7 +178,7 @@ int start(const std::vector<std::string>& argv) {
         if (a.flag("check")) r["check"] = true;
       },
       "usage: robocal start [PLAN.json | --check] [options]\n  Starts a calibration run (with the "
-      "daemon's plan, or PLAN.json as robocald sees the path).\n  --check starts the ten-minute "
+      "daemon's plan, or PLAN.json as robocald sees the path).\n  --check starts the five-minute "
       "health check of the active model instead (docs/health-check.md).\n",
       {"check"});
 }

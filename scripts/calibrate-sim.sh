@@ -67,7 +67,7 @@ echo "== the off-line plan"
 budget=()
 [[ -n ${ROBOCAL_PLAN_BUDGET_MIN:-} ]] && budget=(--time-budget-min "$ROBOCAL_PLAN_BUDGET_MIN")
 "$bin" plan --model "$model" --cell "$cell" --out "$out/plan.json" "${budget[@]}" |
-  grep -E "^(plan|identification|forecast|work volume|optimal|planned)"
+  grep -E "^(plan|identification|forecast|work volume|whole range|optimal|planned)"
 echo
 echo "== robocal-cellsim ($robot, $ROBOCAL_SIM_DIALECT, and the ball-bar on pseudo-terminals) and robocald"
 start_sim_cell "$build" "$out" "$model" "$cell"

@@ -174,9 +174,18 @@ CompensationStatus Compensator::classify(const Arm& ik, const IkSolution& s,
     case IkStatus::kSingular:
       reason = "at a singularity";
       return CompensationStatus::kNearSingularity;
-    case IkStatus::kOutsideLimits:
-      reason = "a joint is outside its limits in every turn";
+    case IkStatus::kOutsideLimits: {
+      // Which joint, where, against which limits: the operator can move the target or the limits.
+      std::ostringstream which;
+      which.precision(4);
+      const Model& m = ik.model();
+      for (int j = 0; j < kJointCount && which.tellp() == 0; ++j)
+        if (s.joints_deg[j] < m.joints[j].min_deg || s.joints_deg[j] > m.joints[j].max_deg)
+          which << "joint " << j + 1 << " at " << s.joints_deg[j] << " deg is outside its limits ("
+                << m.joints[j].min_deg << " to " << m.joints[j].max_deg << " deg) in every turn";
+      reason = which.tellp() > 0 ? which.str() : "a joint is outside its limits in every turn";
       return CompensationStatus::kOutsideLimits;
+    }
     case IkStatus::kOk:
       break;
   }

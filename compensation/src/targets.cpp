@@ -49,6 +49,11 @@ Header readHeader(const std::vector<std::string_view>& fields, bool& joints_form
     h.values[k] = columnOf(fields, wanted[k]);
     if (h.values[k] < 0) throw FormatError(where + "the header has no column '" + wanted[k] + "'");
   }
+  // compensate's own output (docs/compensation.md, "Output") read back as targets.
+  if (columnOf(fields, "status") >= 0 && columnOf(fields, "predicted_error_mm") >= 0)
+    throw FormatError(where +
+                      "this is robocal compensate's output (its status and predicted_error_mm "
+                      "columns), not a targets file: give the targets it was made from");
   h.name = columnOf(fields, "name");
   h.config = columnOf(fields, "config");
   if (h.config >= 0 && joints_form)
@@ -106,6 +111,7 @@ TargetFile parseTargets(const std::string& text, const std::string& source) {
     }
     Target t;
     t.line = line_no;
+    t.written = v;
     if (header->name >= 0) t.name = std::string(fields[header->name]);
     if (file.joints_form) {
       t.nominal_joints = JointsDeg(v.data());
@@ -122,7 +128,45 @@ TargetFile parseTargets(const std::string& text, const std::string& source) {
     file.targets.push_back(std::move(t));
   });
   if (!header) throw FormatError(source + ": empty: no header row (see docs/compensation.md)");
+  if (file.targets.empty())
+    throw FormatError(source + ": no targets: a header and no rows (see docs/compensation.md)");
   return file;
+}
+
+std::optional<std::string> targetsUnitsProblem(const TargetFile& file) {
+  if (file.targets.empty()) return std::nullopt;
+  const std::string first =
+      " (first at " + file.source + ":" + std::to_string(file.targets.front().line) + ")";
+  // The largest absolute value of the written columns [from, from + 3), over all targets.
+  const auto largest = [&](int from) {
+    double m = 0;
+    for (const Target& t : file.targets)
+      for (int k = from; k < from + 3; ++k) m = std::max(m, std::abs(t.written[k]));
+    return m;
+  };
+  constexpr double kTurnRad = 2 * M_PI + 0.01;
+  if (file.joints_form) {
+    const double joints = std::max(largest(0), largest(3));
+    // A program's joints sweep tens of degrees: every one within a turn in radians is radians.
+    if (file.targets.size() >= 2 && joints > 0.5 && joints <= kTurnRad)
+      return "every joint of these " + std::to_string(file.targets.size()) +
+             " targets lies within +/-" + fixed(joints, 2) + ", as if in radians" + first +
+             "; targets hold joints in degrees (docs/compensation.md): convert them (x 57.2958)";
+    return std::nullopt;
+  }
+  // A tool a few millimetres from the fixture's origin at every target is a tool in metres.
+  const double position = largest(0);
+  if (position > 0.01 && position <= 3)
+    return "every target position lies within " + fixed(position, 3) +
+           " of the fixture's origin, as if in metres" + first +
+           "; x_mm, y_mm, z_mm are millimetres: convert them (x 1000)";
+  // A tool's orientations over a program span more than a few degrees (pointing down alone is
+  // 90-180 about some axis): every angle within a turn in radians is radians.
+  const double angle = largest(3);
+  if (file.targets.size() >= 2 && angle > 0.5 && angle <= kTurnRad)
+    return "every target angle lies within +/-" + fixed(angle, 2) + ", as if in radians" + first +
+           "; rz_deg, ry_deg, rx_deg are degrees: convert them (x 57.2958)";
+  return std::nullopt;
 }
 
 TargetFile loadTargetsFile(const std::string& path) {

@@ -93,12 +93,8 @@ DaemonConfig daemonConfigFromJson(const json& root, const std::string& source,
 
 DaemonConfig loadDaemonConfig(const std::string& path) {
   const std::string text = readTextFile(path);
-  json root;
-  try {
-    root = json::parse(text);
-  } catch (const json::exception& e) {
-    throw ConfigError(path + ": not valid JSON: " + e.what());
-  }
+  const json root =
+      jsonread::parseText<ConfigError>(text, path, "robocald's config (docs/robocald.md)");
   const std::string base = std::filesystem::absolute(path).parent_path().string();
   return daemonConfigFromJson(root, path, base);
 }

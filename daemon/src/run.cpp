@@ -407,6 +407,8 @@ std::string RunController::nudge(std::optional<int> shell, double mm) {
 
 std::string RunController::pause(const std::string& reason) {
   return impl_->shared.with([&](RunData& d) -> std::string {
+    if (d.state == proto::RunState::kPaused)
+      return std::string("the run is already paused: resume continues it, abort ends it");
     if (!proto::isBusy(d.state))
       return std::string("no run is in progress (") + proto::runStateName(d.state) + ")";
     d.stop_reason = reason.empty() ? "paused by the operator" : "paused: " + reason;

@@ -304,11 +304,7 @@ std::string readConfigFile(const std::string& path, const char* what) {
 }
 
 json parseConfigJson(const std::string& text, const std::string& source) {
-  try {
-    return json::parse(text);
-  } catch (const json::exception& e) {  // syntax errors, and numbers too large for a double
-    throw ConfigError(source + ": not valid JSON: " + e.what());
-  }
+  return jsonread::parseText<ConfigError>(text, source, "a drivers config (docs/drivers.md)");
 }
 
 }  // namespace

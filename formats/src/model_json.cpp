@@ -371,13 +371,8 @@ Model modelFromJson(const json& root, const std::string& source) {
 }
 
 Model parseModel(const std::string& text, const std::string& source) {
-  json root;
-  try {
-    root = json::parse(text);
-  } catch (const json::exception& e) {  // syntax errors, and numbers too large for a double
-    throw FormatError(source + ": not valid JSON: " + e.what());
-  }
-  return modelFromJson(root, source);
+  return modelFromJson(
+      jsonread::parseText<FormatError>(text, source, "a model (docs/model-format.md)"), source);
 }
 
 nlohmann::ordered_json modelToJson(const Model& m) {

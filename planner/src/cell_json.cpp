@@ -144,13 +144,8 @@ CellConfig cellFromJson(const json& root, const std::string& source) {
 }
 
 CellConfig parseCell(const std::string& text, const std::string& source) {
-  json j;
-  try {
-    j = json::parse(text);
-  } catch (const json::exception& e) {  // syntax errors, and numbers too large for a double
-    throw FormatError(source + ": not valid JSON: " + e.what());
-  }
-  return cellFromJson(j, source);
+  return cellFromJson(
+      jsonread::parseText<FormatError>(text, source, "a cell file (docs/cell-format.md)"), source);
 }
 
 nlohmann::ordered_json cellToJson(const CellConfig& c) {

@@ -289,12 +289,7 @@ Plan planFromJson(const json& root, const std::string& source) {
 }
 
 Plan parsePlan(const std::string& text, const std::string& source) {
-  json j;
-  try {
-    j = json::parse(text);
-  } catch (const json::exception& e) {  // syntax errors, and numbers too large for a double
-    throw FormatError(source + ": not valid JSON: " + e.what());
-  }
+  const json j = jsonread::parseText<FormatError>(text, source, "a plan (docs/plan-format.md)");
   try {
     return planFromJson(j, source);
   } catch (const json::exception& e) {

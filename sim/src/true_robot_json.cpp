@@ -13,12 +13,8 @@ using Object = jsonread::Object<FormatError>;
 using ojson = nlohmann::ordered_json;
 
 nlohmann::json parseJsonFile(const std::string& path) {
-  const std::string text = readTextFile(path);
-  try {
-    return nlohmann::json::parse(text);
-  } catch (const nlohmann::json::exception& e) {
-    throw FormatError(path + ": not valid JSON: " + e.what());
-  }
+  return jsonread::parseText<FormatError>(readTextFile(path), path,
+                                          "a truth or realism file (docs/realism.md)");
 }
 
 }  // namespace

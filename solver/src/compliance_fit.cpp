@@ -185,10 +185,13 @@ SolveResult solveWithCompliance(const Model& start, const std::vector<Sample>& s
     }
     // A joint whose twist was not looked for (its torque too small at these poses: the wrist's)
     // may twist where the arm's whole range loads it: as compliant per N m as the most compliant
-    // joint measured (its twist, or its uncertainty), independent of the rest.
+    // joint measured (the twist the model takes, or its uncertainty), independent of the rest.
     double measured = 0;
-    for (Eigen::Index c = 0; c < k; ++c)
-      measured = std::max({measured, std::abs(twist[out.joints[c]]), std::sqrt(counted(c, c))});
+    for (Eigen::Index c = 0; c < k; ++c) {
+      const int j = out.joints[c];
+      const double taken = out.identified ? twist[j] : start.compliance->deg_per_nm[j];
+      measured = std::max({measured, std::abs(taken), std::sqrt(counted(c, c))});
+    }
     for (int j = 0; j < kJointCount; ++j)
       if (std::find(out.joints.begin(), out.joints.end(), j) == out.joints.end())
         out.covariance(twistCovarianceIndex(j), twistCovarianceIndex(j)) = measured * measured;

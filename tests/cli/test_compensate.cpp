@@ -61,6 +61,44 @@ TEST_CASE("[cli] robocal compensate returns a program's own joints when nothing 
   }
 }
 
+TEST_CASE(
+    "[cli] compensate refuses targets in other units, an empty file and its own input as --out") {
+  TempDir dir;
+  const std::string base = "compensate --model " + kModel + " --nominal " + kModel + " --targets ";
+  // Joints in radians: refused, the conversion named, nothing written.
+  writeFile(dir / "rad.csv",
+            "j1,j2,j3,j4,j5,j6\n-0.0427,0.5939,-3.3735,0.1,0.2,0.3\n"
+            "0.1,0.6,-3.1,0.2,-0.4,1.5\n");
+  RunResult r = runRobocal(base + dir / "rad.csv" + " --out " + dir / "never.csv");
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.output, Contains("as if in radians") && Contains("nothing was written"));
+  CHECK_FALSE(std::filesystem::exists(dir / "never.csv"));
+  // Poses in metres.
+  writeFile(dir / "m.csv", "x_mm,y_mm,z_mm,rz_deg,ry_deg,rx_deg\n0.1,0.2,0.25,0,135,0\n");
+  r = runRobocal(base + dir / "m.csv" + " --out " + dir / "never.csv");
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.output, Contains("as if in metres"));
+  CHECK_FALSE(std::filesystem::exists(dir / "never.csv"));
+  // No targets: an error, not "0 targets".
+  writeFile(dir / "empty.csv", "j1,j2,j3,j4,j5,j6\n");
+  r = runRobocal(base + dir / "empty.csv" + " --out " + dir / "never.csv");
+  CHECK(r.exit_code == 1);
+  CHECK_THAT(r.output, Contains("no targets"));
+  CHECK_FALSE(std::filesystem::exists(dir / "never.csv"));
+  // --out naming the targets file (here through another spelling of its path): refused, kept.
+  const std::string targets = "j1,j2,j3,j4,j5,j6\n10,45,-170,0,30,0\n";
+  writeFile(dir / "t.csv", targets);
+  r = runRobocal(base + dir / "t.csv" + " --out " + dir.path.string() + "/./t.csv");
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.output, Contains("is the --targets file"));
+  CHECK(readFile(dir / "t.csv") == targets);
+  // Its own output given back as targets is recognised.
+  REQUIRE(runRobocal(base + dir / "t.csv" + " --out " + dir / "out.csv").exit_code == 0);
+  r = runRobocal(base + dir / "out.csv" + " --out " + dir / "again.csv");
+  CHECK(r.exit_code == 1);
+  CHECK_THAT(r.output, Contains("this is robocal compensate's output"));
+}
+
 TEST_CASE("[cli] a model without a recorded nominal: the built-in of its name, else --nominal") {
   TempDir dir;
   writeFile(dir / "program.csv", "name,j1,j2,j3,j4,j5,j6\nb,-45,60,-140,20,45,30\n");

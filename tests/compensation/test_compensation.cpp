@@ -285,6 +285,33 @@ TEST_CASE("targets files: both forms, and malformed rows named by file:line") {
   CHECK_THROWS_WITH(parseTargets("\n# nothing\n", "e.csv"), Contains("e.csv: empty"));
 }
 
+TEST_CASE("a targets file in another unit, with no targets, or compensate's own output is named") {
+  // Joints in radians, positions in metres, angles in radians: each said, with the conversion.
+  const auto problem = [](const std::string& text) {
+    return targetsUnitsProblem(parseTargets(text, "t.csv")).value_or("");
+  };
+  CHECK_THAT(problem("j1,j2,j3,j4,j5,j6\n-0.0427,0.5939,-3.3735,0.1,0.2,0.3\n"
+                     "0.1,0.6,-3.1,0.2,-0.4,1.5\n"),
+             Contains("as if in radians (first at t.csv:2)") && Contains("x 57.2958"));
+  CHECK_THAT(problem("x_mm,y_mm,z_mm,rz_deg,ry_deg,rx_deg\n0.1,0.2,0.3,0,135,0\n"),
+             Contains("as if in metres") && Contains("x 1000"));
+  CHECK_THAT(problem("x_mm,y_mm,z_mm,rz_deg,ry_deg,rx_deg\n100,200,300,0,2.356,0\n"
+                     "150,200,300,0.1,2.2,-0.1\n"),
+             Contains("every target angle lies within +/-2.36, as if in radians"));
+  // Programs in the right units pass, a single pose too; a home at all zeros is no radians.
+  CHECK(problem("j1,j2,j3,j4,j5,j6\n10,45,-170,0,30,0\n-5,50,-160,10,-30,90\n").empty());
+  CHECK(problem("j1,j2,j3,j4,j5,j6\n0,0,0,0,0,0\n0,0,0,0,0,0\n").empty());
+  CHECK(problem("x_mm,y_mm,z_mm,rz_deg,ry_deg,rx_deg\n100,200,300,0,135,0\n").empty());
+
+  CHECK_THROWS_WITH(parseTargets("j1,j2,j3,j4,j5,j6\n", "e.csv"),
+                    Contains("e.csv: no targets: a header and no rows"));
+  CHECK_THROWS_WITH(
+      parseTargets(
+          "name,j1,j2,j3,j4,j5,j6,a1,a2,a3,a4,a5,a6,predicted_error_mm,status,config,note\n",
+          "out.csv"),
+      Contains("out.csv:1: this is robocal compensate's output"));
+}
+
 TEST_CASE("the output never commands a target that cannot be reached") {
   const Model nominal = puma560NominalModel();
   const Compensator comp(nominal, perturbed(4));
@@ -378,6 +405,13 @@ TEST_CASE("targets are reached as the calibration reached its points: up from a 
   const auto limited = compensateAll(Compensator(nominal, tight));
   CHECK(limited[0].status == CompensationStatus::kOutsideLimits);
   CHECK_THAT(limited[0].reason, Contains("approach pre-point puts joint 1"));
+  // A target that every solution puts past a joint's limits names the joint and the limits.
+  Model narrow = nominal;
+  narrow.joints[2].min_deg = 40;
+  narrow.joints[2].max_deg = 41;
+  const CompensatedTarget past = Compensator(narrow, calibrated).forPose(with[0].target);
+  CHECK(past.status == CompensationStatus::kOutsideLimits);
+  CHECK_THAT(past.reason, Contains("joint 3 at") && Contains("(40 to 41 deg)"));
 }
 
 TEST_CASE("a V+ or AS location file holds every reachable target and its pre-point by name") {

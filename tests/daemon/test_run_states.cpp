@@ -281,6 +281,9 @@ TEST_CASE("run states: a pause at a prompt, a resume, a pause again and a second
   CHECK(h.seen("SAMPLE").empty());
   CHECK_FALSE(h.run().status().resumable.empty());
   CHECK_FALSE(h.run().start(h.plan()).empty());  // resume or abort it first
+  // A pause of a paused run says it is paused, not that there is no run.
+  CHECK_THAT(h.run().pause({}),
+             Catch::Contains("already paused") && Catch::Contains("resume continues it"));
   REQUIRE(h.run().resume("").empty());
   REQUIRE(h.waitState({"paused", "done", "error"}) == "paused");  // paused at its prompt again
   REQUIRE(h.run().resume("").empty());

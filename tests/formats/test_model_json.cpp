@@ -129,6 +129,10 @@ TEST_CASE("the calibrated model is named after its nominal and the day, with its
 
 TEST_CASE("bad model files name the key and the problem") {
   CHECK_THROWS_WITH(parseModel("{", "m.json"), Contains("m.json: not valid JSON"));
+  // In words: no library prefix; an empty file says it is empty and what was expected.
+  CHECK_THROWS_WITH(parseModel("{", "m.json"), !Contains("json.exception"));
+  CHECK_THROWS_WITH(parseModel(" \n", "m.json"),
+                    Contains("m.json: empty: expected a model (docs/model-format.md)"));
   CHECK_THROWS_WITH(parseModel("[]", "m.json"), Contains("expected an object"));
   CHECK_THROWS_WITH(parseModel(edited([](auto& j) { j.erase("links"); }), "m.json"),
                     Contains("m.json: links: missing"));

@@ -14,6 +14,7 @@
 #include <robocal/compensation/compensate.hpp>
 #include <robocal/formats/error.hpp>
 
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -26,6 +27,7 @@ struct Target {
   std::optional<ArmConfig> config;          // the pose form's optional config column
   std::optional<JointsDeg> nominal_joints;  // the joints form
   int line = 0;                             // 1-based line in the file
+  std::array<double, 6> written{};          // the row's six numbers as the file has them
 };
 
 struct TargetFile {
@@ -37,6 +39,9 @@ struct TargetFile {
 
 TargetFile parseTargets(const std::string& text, const std::string& source = "targets");
 TargetFile loadTargetsFile(const std::string& path);
+// Why the file's numbers look like another unit than the format's, in words (joints in radians,
+// positions in metres), with the fix; nullopt when they look right.
+std::optional<std::string> targetsUnitsProblem(const TargetFile& file);
 
 // Compensates one target (the form decides which Compensator call).
 CompensatedTarget compensateTarget(const Compensator& compensator, const Target& target);

@@ -34,6 +34,23 @@ inline std::string got(const Json& v) {
   return v.is_number() ? v.dump() : std::string(v.type_name());
 }
 
+// The JSON value of a file's or a request's text. An empty text says so and what was expected (a
+// file emptied by a full disk, a wrong path); a syntax error says where in words, without the
+// library's "[json.exception.parse_error.101]" prefix. Numbers too large for a double are refused
+// as syntax. Throws Error("<source>: ...").
+template <typename Error>
+Json parseText(const std::string& text, const std::string& source, const std::string& expected) {
+  if (text.find_first_not_of(" \t\r\n") == std::string::npos)
+    throw Error(source + ": empty: expected " + expected);
+  try {
+    return Json::parse(text);
+  } catch (const Json::exception& e) {
+    std::string why = e.what();
+    if (!why.empty() && why.front() == '[') why.erase(0, why.find("] ") + 2);
+    throw Error(source + ": not valid JSON: " + why);
+  }
+}
+
 // Checks single values; every failure throws Error("<source>: <path>: <problem>"), or
 // Error("<path>: <problem>") with an empty source (a caller that adds the source itself).
 template <typename Error>
