@@ -128,6 +128,19 @@ std::string summaryHtml(const FitAssessment& a, const Model& calibrated,
     h += row(a.validation->description, std::to_string(a.validation->stats.count) +
                                             " samples, RMS " + mm(a.validation->stats.rms_mm) +
                                             ", max " + mm(a.validation->stats.max_abs_mm));
+  // The evidence robocal solve prints beside the verdict: what the model may not contain, the
+  // bar's own noise (from revisits), the drift, the twist, how the points were reached.
+  h += row("model adequacy", a.adequacy.summary());
+  if (a.adequacy.drift.places > 0) h += row("drift", a.adequacy.drift.summary());
+  if (a.compliance) h += row("gravity compliance", a.compliance->summary());
+  if (calibrated.provenance)
+    h += row("approach", calibrated.provenance->approach_deg > 0
+                             ? fmt("every point up from a pre-point %.4g deg below it in every "
+                                   "joint: compensate reaches targets so too",
+                                   calibrated.provenance->approach_deg)
+                             : std::string("none: the points were reached as the paths came, "
+                                           "targets are reached from either side, and the "
+                                           "predicted errors count each joint's backlash"));
   if (a.truth)
     h += row("ball-position error against the truth",
              "nominal RMS " + mm(a.truth->nominal_rms_mm) + ", calibrated RMS " +

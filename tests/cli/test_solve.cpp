@@ -81,6 +81,10 @@ TEST_CASE("robocal solve --report writes the figures and report.json") {
   CHECK_THAT(html, Contains("<!DOCTYPE html>") && Contains("<td class='l'>L0.x</td>") &&
                        Contains("B3C3 +150 mm") && Contains("href='shell_rms.svg'") &&
                        Contains("<svg"));
+  // The evidence the terminal prints beside the verdict is on the page too.
+  CHECK_THAT(html, Contains(">model adequacy<") && Contains(">gravity compliance<") &&
+                       Contains(">approach<"));
+  CHECK_THAT(r.output, Contains("model adequacy: "));
   // One verdict: the page's box, the terminal's last block and report.json's object are one
   // rendering each of the same verdict, with the accuracy, the model written and the next step.
   const ResultVerdict verdict = resultVerdictFromJson(report["verdict"]);
