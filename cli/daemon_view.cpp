@@ -121,9 +121,12 @@ std::string progressLine(const proto::Progress& p, std::optional<double> bar_mm)
     return std::string("no run in progress") + (bar_mm ? format("  bar %+.3f mm", *bar_mm) : "");
   constexpr int kWidth = 20;
   const int filled = total > 0 ? std::clamp(kWidth * done / total, 0, kWidth) : 0;
+  // Shell 0 is no shell: before the first (its connect prompt) it is the first to come, at the
+  // end's detach the last.
+  const int shell = p.shell > 0 ? p.shell : done < total ? 1 : p.shells;
   std::string line = "[" + std::string(filled, '#') + std::string(kWidth - filled, '.') + "] " +
                      std::to_string(done) + "/" + std::to_string(total) + "  shell " +
-                     std::to_string(p.shell) + "/" + std::to_string(p.shells);
+                     std::to_string(shell) + "/" + std::to_string(p.shells);
   if (!p.connection.empty()) line += " " + p.connection;
   line += "  left " + clockText(p.eta_s);
   if (bar_mm) line += "  bar " + format("%+.3f mm", *bar_mm);

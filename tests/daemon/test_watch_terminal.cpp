@@ -119,6 +119,9 @@ TEST_CASE("robocal watch in a terminal and piped, at a prompt and while measurin
   TerminalProgram watch({binDir() + "/robocal", "watch", "--port", port});
   CHECK(watch.waitForScreen(std::regex("OPERATOR: CONNECT THE BALL-BAR"), 10));
   CHECK(watch.waitForScreen(std::regex("Then type: +robocal confirm --shell 1"), 10));
+  // The live line at the first prompt names the shell to come, never a shell 0.
+  CHECK(watch.waitForScreen(std::regex("shell 1/1"), 10));
+  CHECK(watch.screen().find("shell 0/") == std::string::npos);
   sim::answerPrompt(
       *c, proto::parseObject<proto::Prompt>(*prompt),
       [&](const std::string& cmd) { return cell.sim->control(cmd); }, cell.daemon->token(), 150);
