@@ -62,6 +62,9 @@ unreachable; the last two carry no joints (docs/compensation.md).
                         Kawasaki AS .JOINTS block), #name j1 ... j6 per target (its name,
                         else p<line>), its pre-point as #name_pre; rows that cannot be
                         commanded become ; comment lines
+  --units-as-given      take the targets' numbers as mm and deg even where they look like
+                        metres or radians (every joint or angle within one turn in
+                        radians, every position within 3 mm of the origin): refused without
 
 exit status: 0 every target ok, 1 an unreadable input, 2 a usage error,
              3 written, but some targets are not ok (listed on stderr)
@@ -100,18 +103,22 @@ int compensateProgram(const Args& args, const Compensator& compensator,
   return not_ok || !program.undefined.empty() ? kExitSomeNotOk : 0;
 }
 
-// Whether two paths name one file (the second need not exist yet).
+// Whether two paths name one file (the second need not exist yet); false when either cannot be
+// resolved (the write then fails on its own).
 bool sameFile(const std::string& a, const std::string& b) {
   std::error_code ec;
   if (std::filesystem::equivalent(a, b, ec)) return true;
-  return std::filesystem::weakly_canonical(a, ec) == std::filesystem::weakly_canonical(b, ec);
+  const auto ca = std::filesystem::weakly_canonical(a, ec);
+  if (ec) return false;
+  const auto cb = std::filesystem::weakly_canonical(b, ec);
+  return !ec && ca == cb;
 }
 
 int run(const std::vector<std::string>& argv) {
   const Args args(argv,
                   {"model", "targets", "out", "nominal", "tool", "format", "approach-deg",
                    "payload-kg", "payload-com", "program", "dialect"},
-                  {"help"});
+                  {"help", "units-as-given"});
   if (args.flag("help")) {
     std::fputs(kHelp, stdout);
     return 0;
@@ -134,6 +141,10 @@ int run(const std::vector<std::string>& argv) {
     options.tool = *tool;
   }
   if (args.has("program")) {
+    if (sameFile(args.get("program", ""), out_path))
+      throw UsageError("--out " + out_path +
+                       " is the --program file: write elsewhere (nothing "
+                       "was written)");
     options.approach_deg = 0;  // no pre-points: the program's own moves decide
     return compensateProgram(args, Compensator(nominal, calibrated, options), out_path);
   }
@@ -153,8 +164,9 @@ int run(const std::vector<std::string>& argv) {
                      " is the --targets file: write elsewhere (nothing was "
                      "written)");
   const TargetFile file = loadTargetsFile(targets_path);
-  if (const auto units = targetsUnitsProblem(file))
-    throw UsageError(targets_path + ": " + *units + " (nothing was written)");
+  if (const auto units = targetsUnitsProblem(file); units && !args.flag("units-as-given"))
+    throw UsageError(targets_path + ": " + *units +
+                     " (nothing was written; --units-as-given if they are mm and deg after all)");
   const Compensator compensator(nominal, calibrated, options);
   std::vector<CompensatedTarget> results;
   size_t not_ok = 0;

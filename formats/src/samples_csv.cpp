@@ -15,8 +15,8 @@ namespace {
 constexpr std::array<const char*, 13> kColumns = {
     "shell", "ball", "chuck", "extension_mm", "lat_deg", "lon_deg",  "j1",
     "j2",    "j3",   "j4",    "j5",           "j6",      "length_mm"};
-constexpr double kMaxTimeS = 1e12;      // Unix time for 30,000 years: printed in a short field
-constexpr double kMaxApproachDeg = 10;  // a pre-point further than this is no backlash take-up
+constexpr double kMaxTimeS = 1e12;     // Unix time for 30,000 years: printed in a short field
+constexpr double kMaxApproachDeg = 1;  // as a model, a cell and --approach-deg take it
 
 }  // namespace
 

@@ -155,15 +155,21 @@ SolveResult solveWithCompliance(const Model& start, const std::vector<Sample>& s
     // that bounded by what a twist can be (priorTwistSigmaDegPerNm, as a Gaussian prior): where
     // the data barely tell it (one shell, the paper's compact fixture), about the prior's size
     // instead of a sigma far past any real arm's.
+    // The model keeps the start's twist, so what the data and the prior together say it is
+    // (the posterior's mean) counts as an error beside their uncertainty.
     Eigen::MatrixXd counted = cov;
     if (!out.identified) {
       const auto prior = priorTwistSigmaDegPerNm(start);
-      Eigen::MatrixXd information = cov.ldlt().solve(Eigen::MatrixXd::Identity(k, k));
+      const Eigen::MatrixXd data_information =
+          jac.transpose() * jac / (fit.sigma_mm * fit.sigma_mm);
+      Eigen::MatrixXd information = data_information;
       for (Eigen::Index c = 0; c < k; ++c) {
         const double p = prior[out.joints[c]];
         if (p > 0) information(c, c) += 1 / (p * p);
       }
       counted = information.ldlt().solve(Eigen::MatrixXd::Identity(k, k));
+      const Eigen::VectorXd posterior_change = counted * (data_information * change);
+      counted += posterior_change * posterior_change.transpose();
       for (Eigen::Index c = 0; c < k; ++c)
         out.sigma_deg_per_nm[out.joints[c]] = std::sqrt(std::max(0.0, counted(c, c)));
     }
@@ -205,7 +211,7 @@ SolveResult solveWithCompliance(const Model& start, const std::vector<Sample>& s
       }
       if (std::abs(twist_deg) > std::abs(out.largest_twist_deg)) {
         out.largest_twist_deg = twist_deg;
-        out.largest_twist_sigma_deg = std::sqrt(std::max(0.0, g.dot(cov * g)));
+        out.largest_twist_sigma_deg = std::sqrt(std::max(0.0, g.dot(counted * g)));
       }
     }
   }

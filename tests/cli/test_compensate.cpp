@@ -79,6 +79,10 @@ TEST_CASE(
   CHECK(r.exit_code == 2);
   CHECK_THAT(r.output, Contains("as if in metres"));
   CHECK_FALSE(std::filesystem::exists(dir / "never.csv"));
+  // A user sure of the units says so: the file is taken as written.
+  r = runRobocal(base + dir / "m.csv" + " --units-as-given --out " + dir / "given.csv");
+  CHECK(r.exit_code != 2);
+  CHECK(std::filesystem::exists(dir / "given.csv"));
   // No targets: an error, not "0 targets".
   writeFile(dir / "empty.csv", "j1,j2,j3,j4,j5,j6\n");
   r = runRobocal(base + dir / "empty.csv" + " --out " + dir / "never.csv");

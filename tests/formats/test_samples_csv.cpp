@@ -122,7 +122,9 @@ TEST_CASE("how each point was approached is an optional column the fit reads bac
              Contains(std::string(kSamplesHeader) + ",time_s,approach_deg\n"));
   const std::string header = std::string(kSamplesHeader) + ",approach_deg\n";
   CHECK_THROWS_WITH(parseSamples(header + "1,1,1,0,10,0,1,2,3,4,5,6,100,-0.02\n", "s.csv"),
-                    Contains("s.csv:2: column 'approach_deg': expected degrees from 0 to 10"));
+                    Contains("s.csv:2: column 'approach_deg': expected degrees from 0 to 1"));
+  CHECK_THROWS_WITH(parseSamples(header + "1,1,1,0,10,0,1,2,3,4,5,6,100,2\n", "s.csv"),
+                    Contains("column 'approach_deg'"));  // past what a model file holds
   CHECK_THROWS_WITH(parseSamples(header + "1,1,1,0,10,0,1,2,3,4,5,6,100,up\n", "s.csv"),
                     Contains("s.csv:2: column 'approach_deg'"));
   CHECK_FALSE(parseSamples(header + "1,1,1,0,10,0,1,2,3,4,5,6,100,\n")[0].approach_deg);
