@@ -29,4 +29,17 @@ Eigen::MatrixXd covarianceAtKnownTwist(const Eigen::MatrixXd& covariance) {
   return params - cross * twist.ldlt().solve(cross.transpose());
 }
 
+Eigen::MatrixXd withoutUnfittedTwists(const Eigen::MatrixXd& covariance) {
+  Eigen::MatrixXd out = covariance;
+  if (!hasTwistRows(covariance)) return out;
+  for (int j = 0; j < kJointCount; ++j) {
+    const int t = twistCovarianceIndex(j);
+    if (covariance.block(0, t, kParamCount, 1).isZero(0)) {
+      out.row(t).setZero();
+      out.col(t).setZero();
+    }
+  }
+  return out;
+}
+
 }  // namespace robocal

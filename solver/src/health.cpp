@@ -102,8 +102,10 @@ Named selectMoved(const Model& active, const std::vector<Sample>& samples,
     // was there at the calibration too, and its uncertainty would hide a change of joints 2-3
     // (a 0.02 deg J2.offset seen in 28 of 30 checks with it, 30 of 30 without).
     const bool twists = active.compliance && active.compliance->twists();
-    const Eigen::MatrixXd c =
-        twists ? *active.covariance : covarianceAtKnownTwist(*active.covariance);
+    // The twists the fit did not look for (the wrist's, at a prior's size) likewise: they are
+    // whatever they were at the calibration.
+    const Eigen::MatrixXd c = twists ? withoutUnfittedTwists(*active.covariance)
+                                     : covarianceAtKnownTwist(*active.covariance);
     Eigen::MatrixXd jac = out.jac;
     if (hasTwistRows(c)) {
       jac.conservativeResize(n, c.cols());

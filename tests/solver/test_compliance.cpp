@@ -213,6 +213,8 @@ TEST_CASE("compliance: the identified twist's covariance joins the 54's as the b
     CHECK(joint.row(t).cwiseAbs().sum() == Approx(joint(t, t)));
     fitted_only(t, t) = 0;
   }
+  // What the calibration measured alone: the health check's whitening (solver/health.cpp).
+  CHECK((withoutUnfittedTwists(joint) - fitted_only).cwiseAbs().maxCoeff() == 0);
   // The predicted ball errors carry it: the batch covariance carried to the ball by the position
   // Jacobian, the twist's columns again by differences of the model.
   const std::vector<double> predicted = predictedBallErrors(at, fitted_only, samples);

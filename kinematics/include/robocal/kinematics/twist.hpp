@@ -49,5 +49,9 @@ inline bool hasTwistRows(const Eigen::MatrixXd& covariance) {
 // fit at a fixed twist); the 54's block of any other. A model that keeps its start's twist (one
 // not told from noise) is judged by it where a change since the calibration is the question.
 Eigen::MatrixXd covarianceAtKnownTwist(const Eigen::MatrixXd& covariance);
+// A covariance with the twists' rows without those the fit did not look for: rows independent of
+// the 54 (a prior's size for a joint too little loaded at the shells, solver/compliance_fit.hpp),
+// zeroed. What the calibration itself measured; any other covariance as it is.
+Eigen::MatrixXd withoutUnfittedTwists(const Eigen::MatrixXd& covariance);
 
 }  // namespace robocal
