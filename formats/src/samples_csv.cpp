@@ -18,6 +18,14 @@ constexpr std::array<const char*, 13> kColumns = {
 constexpr double kMaxTimeS = 1e12;     // Unix time for 30,000 years: printed in a short field
 constexpr double kMaxApproachDeg = 1;  // as a model, a cell and --approach-deg take it
 
+// An optional column's field: the value to `decimals` places, "" when not known.
+std::string optionalField(const std::optional<double>& value, int decimals) {
+  if (!value) return "";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, *value);
+  return buf;
+}
+
 }  // namespace
 
 const char* const kSamplesHeader =
@@ -122,17 +130,11 @@ std::string formatSampleRow(const Sample& s) {
 }
 
 std::string formatSampleTime(const Sample& s) {
-  if (!s.time_s) return "";
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.3f", *s.time_s);
-  return buf;
+  return optionalField(s.time_s, 3);
 }
 
 std::string formatSampleApproach(const Sample& s) {
-  if (!s.approach_deg) return "";
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.4f", *s.approach_deg);
-  return buf;
+  return optionalField(s.approach_deg, 4);
 }
 
 std::string formatSamples(const std::vector<Sample>& samples) {
