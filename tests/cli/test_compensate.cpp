@@ -69,26 +69,27 @@ TEST_CASE(
   writeFile(dir / "rad.csv",
             "j1,j2,j3,j4,j5,j6\n-0.0427,0.5939,-3.3735,0.1,0.2,0.3\n"
             "0.1,0.6,-3.1,0.2,-0.4,1.5\n");
-  RunResult r = runRobocal(base + dir / "rad.csv" + " --out " + dir / "never.csv");
-  CHECK(r.exit_code == 2);
-  CHECK_THAT(r.output, Contains("as if in radians") && Contains("nothing was written"));
-  CHECK_FALSE(std::filesystem::exists(dir / "never.csv"));
+  // A refusal: the exit status and the words, and nothing written.
+  const auto refused = [&](const std::string& targets, int exit_code, const std::string& words) {
+    const RunResult run = runRobocal(base + dir / targets + " --out " + dir / "never.csv");
+    INFO(run.output);
+    CHECK(run.exit_code == exit_code);
+    CHECK_THAT(run.output, Contains(words));
+    CHECK_FALSE(std::filesystem::exists(dir / "never.csv"));
+    return run;
+  };
+  CHECK_THAT(refused("rad.csv", 2, "as if in radians").output, Contains("nothing was written"));
   // Poses in metres.
   writeFile(dir / "m.csv", "x_mm,y_mm,z_mm,rz_deg,ry_deg,rx_deg\n0.1,0.2,0.25,0,135,0\n");
-  r = runRobocal(base + dir / "m.csv" + " --out " + dir / "never.csv");
-  CHECK(r.exit_code == 2);
-  CHECK_THAT(r.output, Contains("as if in metres"));
-  CHECK_FALSE(std::filesystem::exists(dir / "never.csv"));
+  refused("m.csv", 2, "as if in metres");
+  RunResult r;
   // A user sure of the units says so: the file is taken as written.
   r = runRobocal(base + dir / "m.csv" + " --units-as-given --out " + dir / "given.csv");
   CHECK(r.exit_code != 2);
   CHECK(std::filesystem::exists(dir / "given.csv"));
   // No targets: an error, not "0 targets".
   writeFile(dir / "empty.csv", "j1,j2,j3,j4,j5,j6\n");
-  r = runRobocal(base + dir / "empty.csv" + " --out " + dir / "never.csv");
-  CHECK(r.exit_code == 1);
-  CHECK_THAT(r.output, Contains("no targets"));
-  CHECK_FALSE(std::filesystem::exists(dir / "never.csv"));
+  refused("empty.csv", 1, "no targets");
   // --out naming the targets file (here through another spelling of its path): refused, kept.
   const std::string targets = "j1,j2,j3,j4,j5,j6\n10,45,-170,0,30,0\n";
   writeFile(dir / "t.csv", targets);
